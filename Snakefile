@@ -1,0 +1,118 @@
+# posefix: repair self-intersections in a pose library by space-time integration (S0).
+# Data flow, one pose at a time after the library is validated:
+#   demo (only without --config library=...) -> validate -> keyframes -> classify
+# Rules only wire stage scripts (stages/<rule>.py); the math is in lib/posefix/.
+from snakemake.utils import min_version
+
+min_version("9.0")
+
+
+configfile: os.path.join(workflow.basedir, "config.yaml")
+
+
+include: "rules/common.smk"
+
+
+wildcard_constraints:
+    pose="|".join(re.escape(p) for p in POSES),
+
+
+localrules:
+    all,
+
+
+rule all:
+    input:
+        expand(f"{RESULTS}/{{pose}}/classify.h5", pose=POSES),
+
+
+rule demo:
+    output:
+        library_files() if IS_DEMO else [],
+    params:
+        folder=lambda wildcards, output: os.path.dirname(output[0]),
+        seed=config["demo"]["seed"],
+        around=config["demo"]["around"],
+        python=PYTHON,
+        script=stage_script("demo"),
+    threads: 1
+    log:
+        f"{RESULTS}/logs/demo.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/demo.tsv"
+    shell:
+        "{params.python:q} {params.script:q} --out {params.folder:q} --seed {params.seed}"
+        " --around {params.around} --log {log:q}"
+
+
+rule validate:
+    input:
+        library_files(),
+    output:
+        f"{RESULTS}/library.h5",
+    params:
+        folder=lambda wildcards, input: os.path.dirname(input[0]),
+        reference=LIBRARY.reference.name,
+        poses=",".join(POSES),
+        name=LIBRARY.name,
+        python=PYTHON,
+        script=stage_script("validate"),
+    threads: 1
+    log:
+        f"{RESULTS}/logs/validate.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/validate.tsv"
+    shell:
+        "{params.python:q} {params.script:q} --library {params.folder:q} --reference {params.reference:q}"
+        " --poses {params.poses:q} --name {params.name:q} --out {output:q} --log {log:q}"
+
+
+rule keyframes:
+    input:
+        library=rules.validate.output[0],
+        reference=LIBRARY.reference.path,
+        target=pose_file,
+    output:
+        f"{RESULTS}/{{pose}}/keyframes.h5",
+    params:
+        frames=config["keyframes"]["count"],
+        switches=" ".join(
+            [
+                flag(config["keyframes"]["align"], "--no-align"),
+                flag(config["keyframes"]["unwrap"], "--no-unwrap"),
+            ]
+        ),
+        python=PYTHON,
+        script=stage_script("keyframes"),
+    threads: config["keyframes"]["threads"]
+    log:
+        f"{RESULTS}/logs/{{pose}}/keyframes.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/{{pose}}/keyframes.tsv"
+    shell:
+        "{params.python:q} {params.script:q} --reference {input.reference:q} --target {input.target:q}"
+        " --count {params.frames} {params.switches} --threads {threads} --out {output:q} --log {log:q}"
+
+
+rule classify:
+    input:
+        keyframes=rules.keyframes.output[0],
+        exclude=exclude_files,
+    output:
+        f"{RESULTS}/{{pose}}/classify.h5",
+    params:
+        ring=config["classify"]["ring"],
+        contact=config["classify"]["contact"],
+        radius=config["classify"]["contact_radius"],
+        exclude=exclude_args,
+        python=PYTHON,
+        script=stage_script("classify"),
+    threads: config["classify"]["threads"]
+    log:
+        f"{RESULTS}/logs/{{pose}}/classify.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/{{pose}}/classify.tsv"
+    shell:
+        "{params.python:q} {params.script:q} --keyframes {input.keyframes:q} --ring {params.ring}"
+        " --contact {params.contact} --contact-radius {params.radius} {params.exclude}"
+        " --threads {threads} --out {output:q} --log {log:q}"

@@ -1,0 +1,87 @@
+# Helpers of the Snakefile: config validation, the pose library, paths. No rules here.
+import sys
+from pathlib import Path
+
+from snakemake.utils import validate
+
+sys.path.insert(0, str(Path(workflow.basedir) / "lib"))
+
+from posefix import synth  # noqa: E402
+from posefix.io import InputError, Library, discover_library, mesh_file  # noqa: E402
+
+validate(config, "../schemas/config.schema.yaml")
+
+PYTHON = sys.executable  # the interpreter running snakemake: the venv's under `make run`
+
+
+def stage_script(name):
+    """Absolute path of ``stages/<name>.py`` (rules work from any --directory)."""
+    return str(Path(workflow.basedir) / "stages" / f"{name}.py")
+
+
+def _pose_list(value):
+    """config['poses'] as a list (it may be given as 'a,b' on the command line)."""
+    if isinstance(value, str):
+        return [p.strip() for p in value.split(",") if p.strip()]
+    return value or None
+
+
+def _demo_library():
+    folder = config["demo"]["folder"]
+    reference = mesh_file(f"{folder}/{synth.REFERENCE_NAME}{synth.REFERENCE_SUFFIX}")
+    poses = [mesh_file(f"{folder}/{p.name}{p.suffix}") for p in synth.POSES]
+    wanted = _pose_list(config["poses"])
+    if wanted:
+        unknown = sorted(set(wanted) - {p.name for p in poses})
+        if unknown:
+            raise InputError(folder, f"pose(s) not in the demo library: {', '.join(unknown)}")
+        poses = [p for p in poses if p.name in wanted]
+    return Library(folder=folder, name=config["name"] or "demo", reference=reference, poses=tuple(poses))
+
+
+def _library():
+    """The pose library to process; input problems end the run with one line."""
+    try:
+        if config["library"] is None:
+            return _demo_library()
+        return discover_library(config["library"], reference=config["reference"],
+                                poses=_pose_list(config["poses"]), name=config["name"])
+    except InputError as exc:
+        sys.exit(f"posefix: error: {exc}")
+
+
+LIBRARY = _library()
+POSES = [p.name for p in LIBRARY.poses]
+RESULTS = f"{config['results']}/{LIBRARY.name}"
+IS_DEMO = config["library"] is None
+
+
+def pose_file(wildcards):
+    """Mesh file of the target pose ``wildcards.pose``."""
+    return LIBRARY.pose(wildcards.pose).path
+
+
+def library_files():
+    """Reference and target mesh files, in manifest order."""
+    return [LIBRARY.reference.path] + [p.path for p in LIBRARY.poses]
+
+
+def exclude_args(wildcards):
+    """Command-line options of classify for the hand-picked exclusions of a pose."""
+    value = config["classify"]["exclude"].get(wildcards.pose)
+    if value is None:
+        return ""
+    if isinstance(value, str):
+        return f"--exclude-file '{value}'"
+    return "--exclude " + ",".join(str(int(i)) for i in value)
+
+
+def exclude_files(wildcards):
+    """Input files of classify: the exclusion file of a pose, if one is configured."""
+    value = config["classify"]["exclude"].get(wildcards.pose)
+    return [value] if isinstance(value, str) else []
+
+
+def flag(enabled, option):
+    """``option`` when a boolean config value is false, else nothing (for --no-* switches)."""
+    return "" if enabled else option

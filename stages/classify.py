@@ -1,0 +1,110 @@
+"""Stage classify: self-intersections of every key frame and the constrained vertex set V_C (S0 §4.1).
+
+Detects intersecting face pairs (exact predicates, pairs sharing a vertex not counted) in each
+key frame, optionally near contacts, and removes from V_C the vertices of faces in new pairs plus
+``--ring`` rings, contacts plus rings, and hand-picked vertices; vertices of faces that already
+intersect in the reference are added back (S0 §4.3). See ``posefix.classification``.
+"""
+
+import sys
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "lib"))
+
+import time  # noqa: E402
+
+import numpy as np  # noqa: E402
+
+from posefix.classification import constraint_mask, new_pairs  # noqa: E402
+from posefix.cli import Timings, int_list, run_stage, stage_parser  # noqa: E402
+from posefix.contacts import contact_vertices  # noqa: E402
+from posefix.geometry import bbox_diagonal  # noqa: E402
+from posefix.h5io import read_artifact, write_artifact  # noqa: E402
+from posefix.intersections import intersecting_faces, self_intersecting_pairs  # noqa: E402
+from posefix.io import InputError, read_vertex_ids  # noqa: E402
+
+DOCS = {
+    "pairs": ("index", "intersecting face pairs (f < g) of all key frames, concatenated, (P, 2) int64"),
+    "pair_offsets": ("index", "pairs of frame k are pairs[pair_offsets[k]:pair_offsets[k+1]], (K+1,) int64"),
+    "intersecting_faces": ("count", "faces in at least one intersecting pair, per key frame, (K,) int64"),
+    "new_intersecting_faces": ("count", "faces in a pair that does not intersect in the reference, per key frame, (K,) int64"),
+    "contact_vertices": ("count", "near-contact vertices per key frame (0 when contacts are off), (K,) int64"),
+    "mask": ("bool", "V_C: True for vertices that constrain the vector field, (n,) bool"),
+    "reasons": ("flags", "why a vertex left or re-entered V_C: 1 intersection, 2 ring, 4 contact, "
+                         "8 manual, 16 re-added (reference intersection), (n,) uint8"),
+}
+
+
+def build_parser():
+    parser = stage_parser("classify", __doc__)
+    parser.add_argument("--keyframes", required=True, help="keyframes.h5 of the pose")
+    parser.add_argument("--out", required=True, help="classify.h5 to write")
+    parser.add_argument("--ring", type=int, default=1, help="rings removed around intersecting vertices")
+    parser.add_argument("--contact", type=float, default=0.0,
+                        help="near-contact distance relative to the bbox diagonal (0 = off)")
+    parser.add_argument("--contact-radius", type=float, default=0.1,
+                        help="geodesic neighbourhood radius relative to the bbox diagonal")
+    parser.add_argument("--exclude", type=int_list, default=[], help="vertex ids to exclude by hand, e.g. 1,2,3")
+    parser.add_argument("--exclude-file", default=None, help="text file of vertex ids to exclude by hand")
+    return parser
+
+
+def main(args, log):
+    timings = Timings()
+    if args.ring < 0 or args.contact < 0 or args.contact_radius <= 0:
+        raise InputError("arguments", "--ring and --contact must be >= 0, --contact-radius > 0")
+    with timings.step("read", log):
+        data, _ = read_artifact(args.keyframes, "keyframes", ["frames", "faces", "reference"])
+    frames, F, V_ref = data["frames"], data["faces"], data["reference"]
+    n, K = len(V_ref), len(frames)
+    exclude = _exclusions(args, n)
+    frame_pairs = []
+    with timings.step("intersections", log):
+        for k, V in enumerate(frames):
+            start = time.perf_counter()
+            frame_pairs.append(self_intersecting_pairs(V, F))
+            log.info("frame %d/%d: %d intersecting faces (%.2f s)", k + 1, K,
+                     intersecting_faces(frame_pairs[-1], len(F)).sum(), time.perf_counter() - start)
+    contacts = None
+    if args.contact > 0:
+        d = bbox_diagonal(V_ref)
+        with timings.step("contacts", log):
+            contacts = contact_vertices(frames, F, V_ref, args.contact * d, args.contact_radius * d, log)
+    with timings.step("mask", log):
+        mask, reasons = constraint_mask(F, n, frame_pairs, ring=args.ring, contacts=contacts, exclude=exclude)
+    counts = np.array([intersecting_faces(p, len(F)).sum() for p in frame_pairs])
+    new = np.array([intersecting_faces(new_pairs(p, frame_pairs[0]), len(F)).sum() for p in frame_pairs])
+    log.info("V_C: %d of %d vertices (%.1f %%); intersecting faces: reference %d, target %d, max %d",
+             mask.sum(), n, 100.0 * mask.mean(), counts[0], counts[-1], counts.max())
+    write_artifact(
+        args.out, "classify",
+        {"pairs": np.concatenate(frame_pairs).reshape(-1, 2),
+         "pair_offsets": np.concatenate([[0], np.cumsum([len(p) for p in frame_pairs])]),
+         "intersecting_faces": counts, "new_intersecting_faces": new,
+         "contact_vertices": contacts.sum(axis=1) if contacts is not None else np.zeros(K, dtype=np.int64),
+         "mask": mask, "reasons": reasons},
+        params={"ring": args.ring, "contact": args.contact, "contact_radius": args.contact_radius,
+                "exclude": sorted(set(int(i) for i in exclude))},
+        inputs=[args.keyframes] + ([args.exclude_file] if args.exclude_file else []), timings=timings,
+        metrics={"constraint_vertices": int(mask.sum()), "vertices": n,
+                 "intersecting_faces_reference": int(counts[0]), "intersecting_faces_target": int(counts[-1]),
+                 "intersecting_faces_keyframes_max": int(counts.max()),
+                 "new_intersecting_faces_keyframes_max": int(new.max())},
+        docs=DOCS)
+
+
+def _exclusions(args, n):
+    """Hand-picked vertex ids from ``--exclude`` and ``--exclude-file``, range-checked."""
+    ids = np.asarray(args.exclude, dtype=np.int64)
+    source = "--exclude"
+    if args.exclude_file:
+        ids = np.concatenate([ids, read_vertex_ids(args.exclude_file)])
+        source = args.exclude_file
+    bad = ids[(ids < 0) | (ids >= n)]
+    if len(bad):
+        raise InputError(source, f"vertex id {bad[0]} out of range 0..{n - 1}")
+    return ids
+
+
+if __name__ == "__main__":
+    run_stage(build_parser(), main)

@@ -1,0 +1,43 @@
+"""Shared fixtures: paths, the shared pose libraries (skipped when absent), small meshes, stage runner."""
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+import trimesh
+
+ROOT = Path(__file__).resolve().parents[1]
+DATA = Path(os.environ.get("POSEFIX_DATA", ROOT.parent / "shared" / "data"))
+
+
+def shared_library(name):
+    """Path of a pose library in ../shared/data, or skip the test with the reason."""
+    path = DATA / name
+    if not path.is_dir():
+        pytest.skip(f"needs the shared pose library {path} (../shared/data is absent)")
+    return path
+
+
+def icosphere(subdivisions=2, radius=1.0, centre=(0.0, 0.0, 0.0)):
+    """A closed, clean sphere mesh: (V (n, 3) float, F (m, 3) int64)."""
+    m = trimesh.creation.icosphere(subdivisions=subdivisions, radius=radius)
+    return np.asarray(m.vertices) + np.asarray(centre), np.asarray(m.faces, dtype=np.int64)
+
+
+def run_stage(name, *args, check=True):
+    """Run ``stages/<name>.py`` with this interpreter; returns the CompletedProcess."""
+    proc = subprocess.run([sys.executable, str(ROOT / "stages" / f"{name}.py"), *map(str, args)],
+                          capture_output=True, text=True, cwd=ROOT)
+    if check and proc.returncode != 0:
+        raise AssertionError(f"stage {name} failed ({proc.returncode}):\n{proc.stderr}")
+    return proc
+
+
+@pytest.fixture(scope="session")
+def demo():
+    """The demo library in memory: (V_ref, F, poses dict)."""
+    from posefix.synth import demo_library
+    return demo_library()

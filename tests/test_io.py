@@ -1,0 +1,203 @@
+"""Pose library input: discovery, round trips, and one clear error per kind of bad input.
+
+Every bad input is checked through the stage command line: exit code 2, a single line on stderr
+naming the file and the problem, and no output file left behind.
+"""
+
+import gzip
+import shutil
+
+import numpy as np
+import pytest
+
+from conftest import icosphere, run_stage, shared_library
+from posefix.io import InputError, discover_library, read_mesh, read_vertex_ids, write_mesh
+
+
+@pytest.fixture
+def library(tmp_path):
+    """A clean three-pose library of spheres: sphere-reference.obj, a.obj, b.off."""
+    V, F = icosphere(1)
+    folder = tmp_path / "lib"
+    write_mesh(folder / "sphere-reference.obj", V, F)
+    write_mesh(folder / "a.obj", V * 1.1, F)
+    write_mesh(folder / "b.off", V + 0.1, F)
+    return folder, V, F
+
+
+def _expect_error(tmp_path, folder, *needles, extra=()):
+    out = tmp_path / "out" / "library.h5"
+    proc = run_stage("validate", "--library", folder, "--out", out, *extra, check=False)
+    assert proc.returncode == 2, proc.stderr
+    lines = [line for line in proc.stderr.splitlines() if "error:" in line]
+    assert len(lines) == 1 and "Traceback" not in proc.stderr, proc.stderr
+    assert lines[0].startswith("posefix validate: error: ")
+    for needle in needles:
+        assert needle in lines[0], lines[0]
+    assert not out.parent.exists() or not any(out.parent.iterdir())  # no partial output
+    return lines[0]
+
+
+@pytest.mark.parametrize("suffix", [".obj", ".ply", ".off", ".obj.gz", ".ply.gz", ".off.gz"])
+@pytest.mark.parametrize("encoding", ["binary_little_endian", "ascii"])
+def test_write_read_round_trip_is_exact(tmp_path, suffix, encoding):
+    rng = np.random.default_rng(0)
+    V, F = rng.normal(size=(30, 3)) * 1e3, rng.integers(0, 30, size=(40, 3))
+    write_mesh(tmp_path / f"m{suffix}", V, F, ply_encoding=encoding)
+    V2, F2 = read_mesh(tmp_path / f"m{suffix}")
+    assert np.array_equal(V, V2) and np.array_equal(F, F2)
+
+
+def test_obj_vertex_order_survives_texture_seams(tmp_path):
+    # a vertex used with two texture coordinates must not be split or reordered
+    seams = "vt 0 0\nvt 1 0\nvt 0 1\nvt 1 1\nvt .5 .5\nf 1/1 2/2 3/3\nf 2/5 4/4 3/3\n"
+    (tmp_path / "seam.obj").write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\n" + seams)
+    V, F = read_mesh(tmp_path / "seam.obj")
+    assert V.tolist() == [[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0]]
+    assert F.tolist() == [[0, 1, 2], [1, 3, 2]]
+    # trimesh drops unreferenced vertices of textured OBJ files: caught, never silently renumbered
+    (tmp_path / "unused.obj").write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nv 9 9 9\n" + seams)
+    with pytest.raises(InputError, match="file declares 5 vertices but 4 were read"):
+        read_mesh(tmp_path / "unused.obj")
+
+
+def test_discovery_of_the_lion_library():
+    lib = discover_library(shared_library("lion-poses"))
+    assert lib.name == "lion-poses" and lib.reference.name == "lion-reference"
+    assert [p.name for p in lib.poses] == [f"lion-{i:02d}" for i in range(1, 10)]
+
+
+def test_discovery_with_explicit_reference_and_subset(library):
+    folder, _, _ = library
+    lib = discover_library(folder, reference="a.obj", poses=["b"])
+    assert lib.reference.name == "a" and [p.name for p in lib.poses] == ["b"]
+
+
+def test_valid_library_passes(tmp_path, library):
+    folder, _, _ = library
+    run_stage("validate", "--library", folder, "--out", tmp_path / "library.h5")
+    assert (tmp_path / "library.h5").exists()
+
+
+def test_nan_coordinates(tmp_path, library):
+    folder, V, F = library
+    bad = V.copy()
+    bad[5, 1] = np.nan
+    write_mesh(folder / "a.obj", bad, F)
+    _expect_error(tmp_path, folder, "a.obj", "NaN or infinite", "vertex 5")
+
+
+def test_infinite_coordinates(tmp_path, library):
+    folder, V, F = library
+    bad = V.copy()
+    bad[3, 0] = np.inf
+    write_mesh(folder / "b.off", bad, F)
+    _expect_error(tmp_path, folder, "b.off", "NaN or infinite")
+
+
+def test_empty_file(tmp_path, library):
+    folder, _, _ = library
+    (folder / "a.obj").write_bytes(b"")
+    _expect_error(tmp_path, folder, "a.obj", "empty file")
+
+
+def test_unreadable_file(tmp_path, library):
+    folder, _, _ = library
+    (folder / "c.ply").write_bytes(b"\x00\x01garbage that is no ply" * 10)
+    _expect_error(tmp_path, folder, "c.ply", "cannot be read as PLY")
+
+
+def test_broken_gzip(tmp_path, library):
+    folder, _, _ = library
+    (folder / "c.obj.gz").write_bytes(gzip.compress(b"v 0 0 0\n")[:-6])
+    _expect_error(tmp_path, folder, "c.obj.gz", "gzip")
+
+
+def test_no_reference(tmp_path, library):
+    folder, _, _ = library
+    (folder / "sphere-reference.obj").rename(folder / "c.obj")
+    _expect_error(tmp_path, folder, str(folder), "no reference found")
+
+
+def test_several_references(tmp_path, library):
+    folder, _, _ = library
+    shutil.copy(folder / "sphere-reference.obj", folder / "other-reference.obj")
+    _expect_error(tmp_path, folder, "several reference candidates")
+
+
+def test_face_index_out_of_range(tmp_path, library):
+    folder, V, F = library
+    (folder / "c.off").write_text(f"OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 {len(V) + 5}\n")
+    _expect_error(tmp_path, folder, "c.off", "out of range")
+
+
+def test_face_index_out_of_range_in_ply(tmp_path, library):
+    folder, V, F = library
+    bad = F.copy()
+    bad[2, 1] = len(V)
+    write_mesh(folder / "c.ply", V, bad)
+    _expect_error(tmp_path, folder, "c.ply", "out of range")
+
+
+def test_degenerate_reference_face(tmp_path, library):
+    folder, V, F = library
+    bad = F.copy()
+    bad[7] = [bad[7, 0], bad[7, 0], bad[7, 2]]
+    write_mesh(folder / "sphere-reference.obj", V, bad)
+    _expect_error(tmp_path, folder, "sphere-reference.obj", "degenerate faces", "face 7")
+
+
+def test_zero_area_reference_face(tmp_path, library):
+    folder, V, F = library
+    bad = V.copy()
+    a, b, c = F[4]
+    bad[c] = 0.5 * (bad[a] + bad[b])  # collinear corners
+    write_mesh(folder / "sphere-reference.obj", bad, F)
+    _expect_error(tmp_path, folder, "sphere-reference.obj", "zero-area faces")
+
+
+def test_vertex_count_mismatch(tmp_path, library):
+    folder, V, F = library
+    write_mesh(folder / "a.obj", np.vstack([V, [[5.0, 5.0, 5.0]]]), F)
+    _expect_error(tmp_path, folder, "a.obj", f"{len(V) + 1} vertices, the reference has {len(V)}")
+
+
+def test_face_array_mismatch(tmp_path, library):
+    folder, V, F = library
+    write_mesh(folder / "b.off", V, F[:, [1, 2, 0]])
+    _expect_error(tmp_path, folder, "b.off", "face array differs from the reference")
+
+
+def test_non_triangle_faces(tmp_path, library):
+    folder, _, _ = library
+    (folder / "c.obj").write_text("v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n")
+    _expect_error(tmp_path, folder, "c.obj", "only triangle meshes")
+
+
+def test_unknown_pose_in_subset(tmp_path, library):
+    folder, _, _ = library
+    _expect_error(tmp_path, folder, "pose(s) not found: zzz", extra=("--poses", "a,zzz"))
+
+
+def test_keyframes_stage_reports_bad_target_and_keeps_old_output(tmp_path, library):
+    folder, V, F = library
+    out = tmp_path / "kf.h5"
+    run_stage("keyframes", "--reference", folder / "sphere-reference.obj", "--target", folder / "a.obj",
+              "--out", out, "--count", 3)
+    before = out.read_bytes()
+    write_mesh(folder / "a.obj", V[:-1], F[:10])
+    proc = run_stage("keyframes", "--reference", folder / "sphere-reference.obj", "--target", folder / "a.obj",
+                     "--out", out, check=False)
+    errors = [line for line in proc.stderr.splitlines() if "error:" in line]
+    assert proc.returncode == 2 and len(errors) == 1 and "Traceback" not in proc.stderr
+    assert "a.obj" in errors[0]
+    assert out.read_bytes() == before  # nothing already computed is lost or corrupted
+    assert [p.name for p in tmp_path.iterdir() if p.name.startswith(".kf")] == []
+
+
+def test_vertex_id_files(tmp_path):
+    (tmp_path / "ids.txt").write_text("# hand-picked\n1 2, 3\n10\n")
+    assert read_vertex_ids(tmp_path / "ids.txt").tolist() == [1, 2, 3, 10]
+    (tmp_path / "bad.txt").write_text("1 two 3\n")
+    with pytest.raises(InputError, match="not a vertex id: 'two'"):
+        read_vertex_ids(tmp_path / "bad.txt")

@@ -1,0 +1,111 @@
+"""Stage command lines and artifacts: --help, provenance attributes, documented datasets, determinism."""
+
+import json
+import re
+from pathlib import Path
+
+import h5py
+import numpy as np
+import pytest
+
+from conftest import ROOT, run_stage
+from posefix import __version__
+from posefix.h5io import config_hash, inputs_hash
+
+STAGES = ["demo", "validate", "keyframes", "classify"]
+
+
+def documented_datasets():
+    """Dataset names per stage from the tables of docs/artifacts.md."""
+    text = (ROOT / "docs" / "artifacts.md").read_text()
+    out = {}
+    for section in re.split(r"\n## ", text)[1:]:
+        stage = section.split()[0]
+        out[stage] = set(re.findall(r"^\| `([^`]+)` \|", section, flags=re.M))
+    return out
+
+
+@pytest.mark.parametrize("stage", STAGES)
+def test_help(stage):
+    proc = run_stage(stage, "--help")
+    assert f"usage: {stage}.py" in proc.stdout and "--threads" in proc.stdout
+
+
+@pytest.fixture(scope="module")
+def demo_artifacts(tmp_path_factory):
+    """validate, keyframes and classify run by hand on demo-01 (K = 5)."""
+    tmp = tmp_path_factory.mktemp("stages")
+    run_stage("demo", "--out", tmp / "lib")
+    ref, tgt = tmp / "lib" / "demo-reference.obj", tmp / "lib" / "demo-01.obj"
+    run_stage("validate", "--library", tmp / "lib", "--out", tmp / "library.h5")
+    run_stage("keyframes", "--reference", ref, "--target", tgt, "--count", 5, "--out", tmp / "keyframes.h5")
+    run_stage("classify", "--keyframes", tmp / "keyframes.h5", "--ring", 1, "--contact", 0.01,
+              "--out", tmp / "classify.h5")
+    return tmp
+
+
+@pytest.mark.parametrize("stage", ["validate", "keyframes", "classify"])
+def test_artifact_attributes_and_documentation(demo_artifacts, stage):
+    path = demo_artifacts / ("library.h5" if stage == "validate" else f"{stage}.h5")
+    docs = documented_datasets()[stage]
+    with h5py.File(path, "r") as fh:
+        assert fh.attrs["stage"] == stage and fh.attrs["posefix_version"] == __version__
+        assert fh.attrs["config_sha256"] == config_hash(json.loads(fh.attrs["config"]))
+        assert fh.attrs["inputs_sha256"] == inputs_hash(json.loads(fh.attrs["inputs"]))
+        assert len(fh["timings"].attrs) >= 2 and all(v >= 0 for v in fh["timings"].attrs.values())
+        names = []
+        fh.visititems(lambda name, obj: names.append(name) if isinstance(obj, h5py.Dataset) else None)
+        assert set(names) == docs
+        for name in names:
+            assert fh[name].attrs["description"] and "units" in fh[name].attrs
+
+
+def test_keyframes_and_classify_contents(demo_artifacts):
+    with h5py.File(demo_artifacts / "keyframes.h5", "r") as fh:
+        frames, t = fh["frames"][()], fh["t"][()]
+        assert np.array_equal(t, [0, 0.25, 0.5, 0.75, 1])
+        assert np.abs(frames[0] - fh["reference"][()]).max() < 1e-9 * fh["metrics"].attrs["bbox_diagonal"]
+        assert np.abs(frames[-1] - fh["target"][()]).max() < 1e-9 * fh["metrics"].attrs["bbox_diagonal"]
+    with h5py.File(demo_artifacts / "classify.h5", "r") as fh:
+        offsets, counts = fh["pair_offsets"][()], fh["intersecting_faces"][()]
+        assert len(offsets) == 6 and offsets[-1] == len(fh["pairs"])
+        assert counts[0] == 0 and counts[-1] > 0
+        mask, reasons = fh["mask"][()], fh["reasons"][()]
+        assert np.array_equal(mask, (reasons & 15) == 0)
+        assert fh["metrics"].attrs["constraint_vertices"] == mask.sum()
+        assert fh["contact_vertices"][()].max() > 0
+
+
+def test_stages_are_deterministic(demo_artifacts, tmp_path):
+    ref = demo_artifacts / "lib" / "demo-reference.obj"
+    tgt = demo_artifacts / "lib" / "demo-01.obj"
+    run_stage("keyframes", "--reference", ref, "--target", tgt, "--count", 5, "--out", tmp_path / "k.h5")
+    run_stage("classify", "--keyframes", tmp_path / "k.h5", "--contact", 0.01, "--out", tmp_path / "c.h5")
+    for a, b in (("keyframes.h5", "k.h5"), ("classify.h5", "c.h5")):
+        with h5py.File(demo_artifacts / a, "r") as fa, h5py.File(tmp_path / b, "r") as fb:
+            for name in fa:
+                if isinstance(fa[name], h5py.Dataset):
+                    assert np.array_equal(fa[name][()], fb[name][()]), name
+
+
+def test_manual_exclusion_from_a_file(demo_artifacts, tmp_path):
+    ids = tmp_path / "ids.txt"
+    ids.write_text("0 1 2\n")
+    run_stage("classify", "--keyframes", demo_artifacts / "keyframes.h5", "--exclude-file", ids,
+              "--exclude", "5", "--out", tmp_path / "c.h5")
+    with h5py.File(tmp_path / "c.h5", "r") as fh:
+        assert not fh["mask"][()][[0, 1, 2, 5]].any()
+    ids.write_text("0 99999\n")
+    proc = run_stage("classify", "--keyframes", demo_artifacts / "keyframes.h5", "--exclude-file", ids,
+                     "--out", tmp_path / "d.h5", check=False)
+    assert proc.returncode == 2 and "ids.txt: vertex id 99999 out of range" in proc.stderr
+    assert not (tmp_path / "d.h5").exists()
+
+
+def test_classify_rejects_a_wrong_artifact(demo_artifacts, tmp_path):
+    proc = run_stage("classify", "--keyframes", demo_artifacts / "library.h5", "--out", tmp_path / "c.h5",
+                     check=False)
+    assert proc.returncode == 2 and "not a 'keyframes' artifact" in proc.stderr
+    Path(tmp_path / "junk.h5").write_text("not hdf5")
+    proc = run_stage("classify", "--keyframes", tmp_path / "junk.h5", "--out", tmp_path / "c.h5", check=False)
+    assert proc.returncode == 2 and "cannot be read as HDF5" in proc.stderr
