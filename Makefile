@@ -30,7 +30,7 @@ $(VENV)/.installed: pyproject.toml
 # Debian's PoCL gives an OpenCL CPU device (PyPI's PoCL cannot compile kernels on these CPUs).
 # Installed only when root with apt; otherwise the OpenCL stages fall back to numpy and say so.
 system:
-	@if dpkg -s pocl-opencl-icd >/dev/null 2>&1; then :; \
+	@if dpkg-query -W -f='$${Status}' pocl-opencl-icd 2>/dev/null | grep -q 'install ok installed'; then :; \
 	elif [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then \
 	  echo "posefix: installing pocl-opencl-icd (OpenCL on the CPU)"; \
 	  (apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends pocl-opencl-icd >/dev/null) \
