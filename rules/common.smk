@@ -1,7 +1,9 @@
 # Helpers of the Snakefile: config validation, the pose library, paths. No rules here.
+import shlex
 import sys
 from pathlib import Path
 
+import yaml
 from snakemake.utils import validate
 
 sys.path.insert(0, str(Path(workflow.basedir) / "lib"))
@@ -9,6 +11,23 @@ sys.path.insert(0, str(Path(workflow.basedir) / "lib"))
 from posefix import synth  # noqa: E402
 from posefix.io import InputError, Library, discover_library, mesh_file  # noqa: E402
 
+
+
+def _typed(value):
+    """Undo Snakemake's stringification of nested --config values ("5" -> 5, "true" -> True)."""
+    if isinstance(value, dict):
+        return {k: _typed(v) for k, v in value.items()}
+    if isinstance(value, list):
+        return [_typed(v) for v in value]
+    if isinstance(value, str):
+        parsed = yaml.safe_load(value) if value.strip() else value
+        return parsed if isinstance(parsed, (bool, int, float, list)) else value
+    return value
+
+
+for _section in ("demo", "keyframes", "classify"):
+    if isinstance(config.get(_section), dict):
+        config[_section] = _typed(config[_section])
 validate(config, "../schemas/config.schema.yaml")
 
 PYTHON = sys.executable  # the interpreter running snakemake: the venv's under `make run`
@@ -52,6 +71,9 @@ def _library():
 
 LIBRARY = _library()
 POSES = [p.name for p in LIBRARY.poses]
+_unknown = sorted(set(config["classify"]["exclude"]) - set(POSES))
+if _unknown:
+    sys.exit(f"posefix: error: classify.exclude names pose(s) not in the library: {', '.join(_unknown)}")
 RESULTS = f"{config['results']}/{LIBRARY.name}"
 IS_DEMO = config["library"] is None
 
@@ -72,7 +94,7 @@ def exclude_args(wildcards):
     if value is None:
         return ""
     if isinstance(value, str):
-        return f"--exclude-file '{value}'"
+        return f"--exclude-file {shlex.quote(value)}"
     return "--exclude " + ",".join(str(int(i)) for i in value)
 
 

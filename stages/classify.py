@@ -1,7 +1,7 @@
 """Stage classify: self-intersections of every key frame and the constrained vertex set V_C (S0 §4.1).
 
 Detects intersecting face pairs (exact predicates, pairs sharing a vertex not counted) in each
-key frame, optionally near contacts, and removes from V_C the vertices of faces in new pairs plus
+key frame, optionally near contacts, and removes from V_C the vertices of intersecting faces plus
 ``--ring`` rings, contacts plus rings, and hand-picked vertices; vertices of faces that already
 intersect in the reference are added back (S0 §4.3). See ``posefix.classification``.
 """

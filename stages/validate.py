@@ -17,15 +17,15 @@ import numpy as np  # noqa: E402
 from posefix.cli import Timings, run_stage, stage_parser  # noqa: E402
 from posefix.geometry import bbox_diagonal  # noqa: E402
 from posefix.h5io import write_artifact  # noqa: E402
-from posefix.io import check_pose, check_reference, discover_library, file_sha256, read_mesh  # noqa: E402
+from posefix.io import discover_library, file_sha256, read_pose, read_reference  # noqa: E402
 
 DOCS = {
     "reference/vertices": ("length", "reference vertex positions, (n, 3) float64"),
     "faces": ("index", "triangle vertex indices shared by all poses, (m, 3) int64, 0-based"),
-    "poses/name": ("", "pose names, (p,) str, the reference first"),
-    "poses/path": ("", "mesh file paths as given, (p,) str"),
-    "poses/format": ("", "file format with compression suffix, e.g. '.obj.gz', (p,) str"),
-    "poses/sha256": ("", "sha256 of each file's bytes, (p,) str"),
+    "poses/name": ("", "pose names, (p,) UTF-8 str, the reference first"),
+    "poses/path": ("", "mesh file paths as given, (p,) UTF-8 str"),
+    "poses/format": ("", "file format with compression suffix, e.g. '.obj.gz', (p,) UTF-8 str"),
+    "poses/sha256": ("", "sha256 of each file's bytes, (p,) UTF-8 str"),
 }
 
 
@@ -45,11 +45,9 @@ def main(args, log):
     library = discover_library(args.library, reference=args.reference, poses=poses, name=args.name)
     log.info("library %s: reference %s, %d poses", library.name, library.reference.name, len(library.poses))
     with timings.step("read", log):
-        V_ref, F = read_mesh(library.reference.path)
-        check_reference(library.reference.path, V_ref, F)
+        V_ref, F = read_reference(library.reference.path)
         for i, pose in enumerate(library.poses, 1):
-            V, F_pose = read_mesh(pose.path)
-            check_pose(pose.path, V, F_pose, V_ref, F)
+            read_pose(pose.path, V_ref, F)
             log.info("pose %d/%d %s: ok", i, len(library.poses), pose.name)
     files = (library.reference,) + library.poses
     with timings.step("hash", log):
@@ -57,10 +55,10 @@ def main(args, log):
     write_artifact(
         args.out, "validate",
         {"reference/vertices": V_ref, "faces": F,
-         "poses/name": np.array([f.name for f in files], dtype="S"),
-         "poses/path": np.array([f.path for f in files], dtype="S"),
-         "poses/format": np.array([f.suffix for f in files], dtype="S"),
-         "poses/sha256": np.array(sha, dtype="S")},
+         "poses/name": np.array([f.name for f in files]),
+         "poses/path": np.array([f.path for f in files]),
+         "poses/format": np.array([f.suffix for f in files]),
+         "poses/sha256": np.array(sha)},
         params={"library": args.library, "reference": args.reference, "poses": poses, "name": library.name},
         inputs=[f.path for f in files], timings=timings,
         metrics={"vertices": len(V_ref), "faces": len(F), "poses": len(library.poses),

@@ -45,16 +45,24 @@ def test_new_intersection_excludes_face_vertices_and_one_ring():
     assert np.array_equal(~mask0, seeds)
 
 
-def test_reference_intersections_are_not_repaired_but_readded():
+def test_reference_intersections_are_readded_but_their_rings_are_not():
     V, F = _strip(12)
     n = len(V)
+    A = vertex_adjacency(F, n)
     ref = np.array([[0, 4]])  # faces [0, 1, 13] and [2, 3, 15] already intersect in the reference
-    frames = [ref, ref, np.array([[0, 4], [10, 14]])]  # new: faces [5, 6, 18] and [7, 8, 20]
-    mask, reasons = constraint_mask(F, n, frames, ring=2)
-    assert mask[F[[0, 4]].ravel()].all()  # inherited pair: reproduced, kept in V_C
-    assert reasons[3] == EXCLUDED_RING | READDED_REFERENCE  # two rings from vertex 5, yet re-added
+    frames = [ref, ref, np.array([[0, 4], [10, 14]])]  # later also faces [5, 6, 18] and [7, 8, 20]
+    mask, reasons = constraint_mask(F, n, frames, ring=1)
+    ref_vertices = np.zeros(n, dtype=bool)
+    ref_vertices[F[[0, 4]].ravel()] = True
+    assert mask[ref_vertices].all()  # reproduced, not repaired (S0 4.3)
+    assert (reasons[ref_vertices] == EXCLUDED_INTERSECTION | READDED_REFERENCE).all()
+    ring = grow_rings(ref_vertices, A, 1) & ~ref_vertices
+    assert ring.any() and not mask[ring].any()
     assert not mask[F[[10, 14]].ravel()].any()
     assert np.array_equal(new_pairs(frames[2], ref), [[10, 14]])
+    # a hand-picked exclusion wins over the re-add
+    mask, reasons = constraint_mask(F, n, frames, ring=1, exclude=[1])
+    assert not mask[1] and reasons[1] == EXCLUDED_INTERSECTION | EXCLUDED_MANUAL
 
 
 def test_manual_exclusion_without_rings():

@@ -6,15 +6,14 @@ from conftest import run_stage
 from posefix import synth
 from posefix.intersections import intersecting_faces, self_intersecting_pairs
 from posefix.io import discover_library, read_mesh
-from posefix.topology import edges
+from posefix.topology import edges, half_edges
 
 
 def test_reference_is_a_clean_closed_limb(demo):
     V, F, _ = demo
     assert 2000 <= len(V) <= 5000
     assert len(self_intersecting_pairs(V, F)) == 0
-    E = np.sort(F[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
-    _, counts = np.unique(E, axis=0, return_counts=True)
+    _, counts = np.unique(half_edges(F), axis=0, return_counts=True)
     assert (counts == 2).all()  # closed 2-manifold
     assert len(V) - len(edges(F)) + len(F) == 2  # sphere topology
 

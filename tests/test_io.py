@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from conftest import icosphere, run_stage, shared_library
-from posefix.io import InputError, discover_library, read_mesh, read_vertex_ids, write_mesh
+from posefix.io import InputError, discover_library, read_mesh, read_vertex_ids, write_like, write_mesh
 
 
 @pytest.fixture
@@ -201,3 +201,76 @@ def test_vertex_id_files(tmp_path):
     (tmp_path / "bad.txt").write_text("1 two 3\n")
     with pytest.raises(InputError, match="not a vertex id: 'two'"):
         read_vertex_ids(tmp_path / "bad.txt")
+
+
+def test_obj_face_index_zero(tmp_path, library):
+    folder, _, _ = library
+    (folder / "c.obj").write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 2 3\nf 0 2 4\n")
+    _expect_error(tmp_path, folder, "c.obj", "line 6: face vertex index 0")
+
+
+def test_broken_symlink_is_reported(tmp_path, library):
+    folder, _, _ = library
+    (folder / "c.obj").symlink_to(tmp_path / "nowhere.obj")
+    _expect_error(tmp_path, folder, "c.obj", "cannot be opened")
+
+
+def test_unicode_file_names(tmp_path, library):
+    folder, V, F = library
+    write_mesh(folder / "pöse-ü.obj", V * 0.9, F)
+    run_stage("validate", "--library", folder, "--out", tmp_path / "library.h5")
+    import h5py
+    with h5py.File(tmp_path / "library.h5", "r") as fh:
+        assert "pöse-ü" in [n.decode() for n in fh["poses/name"][()]]
+
+
+def test_unwritable_output_is_one_line(tmp_path, library):
+    folder, _, _ = library
+    (tmp_path / "afile").write_text("")
+    proc = run_stage("validate", "--library", folder, "--out", tmp_path / "afile" / "x.h5", check=False)
+    errors = [line for line in proc.stderr.splitlines() if "error:" in line]
+    assert proc.returncode == 1 and len(errors) == 1 and "Traceback" not in proc.stderr
+
+
+def test_write_like_keeps_obj_faces_normals_and_texture_lines(tmp_path):
+    # the source has per-vertex normals, texture coordinates, a group and a material line
+    src = tmp_path / "src.obj"
+    src.write_text("# header\nmtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0 0.5 0.5 0.5\nv 0 0 1\n"
+                   "vn 0 0 1\nvn 0 0 1\nvn 0 0 1\nvn 0 0 1\nvt 0 0\nvt 1 0\nvt 0 1\ng body\nusemtl skin\n"
+                   "f 1/1/1 3/3/3 2/2/2\nf 1/1/1 2/2/2 4/1/4\nf 1/1/1 4/1/4 3/3/3\nf 2/2/2 3/3/3 4/1/4\n")
+    V, F = read_mesh(src)
+    V_new = V * 2.0 + 0.125
+    write_like(tmp_path / "out.obj", V_new, F, src)
+    V2, F2 = read_mesh(tmp_path / "out.obj")
+    assert np.array_equal(V2, V_new) and np.array_equal(F2, F)
+    a, b = src.read_text().splitlines(), (tmp_path / "out.obj").read_text().splitlines()
+    assert len(a) == len(b)
+    for x, y in zip(a, b):
+        if x.split()[0] not in ("v", "vn"):
+            assert x == y
+    assert b[4].endswith(" 0.5 0.5 0.5")  # vertex colours kept
+    normals = np.array([[float(t) for t in line.split()[1:]] for line in b if line.startswith("vn ")])
+    assert np.allclose(np.linalg.norm(normals, axis=1), 1.0)
+    assert np.allclose(normals[0], -np.ones(3) / np.sqrt(3), atol=1e-8)  # corner at the origin, outward
+
+
+def test_write_like_lion_pose_round_trip(tmp_path):
+    src = shared_library("lion-poses") / "lion-01.obj"
+    V, F = read_mesh(src)
+    write_like(tmp_path / "lion-01.obj", V + 1e-3, F, src)
+    V2, F2 = read_mesh(tmp_path / "lion-01.obj")
+    assert np.array_equal(V2, V + 1e-3) and np.array_equal(F2, F)
+    faces = [line for line in src.read_text().splitlines() if line.startswith("f ")]
+    assert faces == [line for line in (tmp_path / "lion-01.obj").read_text().splitlines() if line.startswith("f ")]
+
+
+@pytest.mark.parametrize("encoding", ["ascii", "binary_big_endian"])
+def test_write_like_keeps_ply_encoding_and_gzip(tmp_path, encoding):
+    V, F = icosphere(1)
+    write_mesh(tmp_path / "src.ply.gz", V, F, ply_encoding=encoding)
+    write_like(tmp_path / "out.ply.gz", V + 1.0, F, tmp_path / "src.ply.gz")
+    assert f"format {encoding}".encode() in gzip.decompress((tmp_path / "out.ply.gz").read_bytes())[:200]
+    V2, F2 = read_mesh(tmp_path / "out.ply.gz")
+    assert np.array_equal(V2, V + 1.0) and np.array_equal(F2, F)
+    with pytest.raises(InputError, match="same format"):
+        write_like(tmp_path / "out.obj", V, F, tmp_path / "src.ply.gz")

@@ -104,3 +104,13 @@ def test_lion_library(tmp_path):
             assert counts[0] == 138 and counts[-1] == target_counts.get(pose, counts[-1])
             assert max(counts[1:-1]) <= max(counts[0], counts[-1])  # no tearing in the key frames
             assert fh["mask"][()].sum() > 0.5 * len(fh["mask"])
+
+
+def test_nested_config_overrides_reach_the_stages(tmp_path):
+    proc = snakemake(tmp_path, "-n", "-p", "--config", "keyframes={'count': 5, 'align': 'false'}",
+                     "classify={'ring': 2, 'contact': 0.01, 'exclude': {'demo-01': [3, 4]}}")
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    out = proc.stdout + proc.stderr
+    assert "--count 5 --no-align" in out and "--ring 2 --contact 0.01" in out and "--exclude 3,4" in out
+    proc = snakemake(tmp_path, "-n", "--config", "classify={'exclude': {'demo-9': [1]}}")
+    assert proc.returncode != 0 and "classify.exclude names pose(s) not in the library: demo-9" in proc.stderr

@@ -71,7 +71,8 @@ def test_keyframes_and_classify_contents(demo_artifacts):
         assert len(offsets) == 6 and offsets[-1] == len(fh["pairs"])
         assert counts[0] == 0 and counts[-1] > 0
         mask, reasons = fh["mask"][()], fh["reasons"][()]
-        assert np.array_equal(mask, (reasons & 15) == 0)
+        readded = (reasons & 16 > 0) & (reasons & 8 == 0)
+        assert np.array_equal(mask, ((reasons & 15) == 0) | readded)
         assert fh["metrics"].attrs["constraint_vertices"] == mask.sum()
         assert fh["contact_vertices"][()].max() > 0
 

@@ -1,16 +1,15 @@
 """Vertex classification (S0 §4.1): which vertices constrain the space-time vector field.
 
-``V_C`` starts as every vertex. Removed are
+``V_C`` starts as every vertex. Removed are (S0 §4.1)
 
-* the vertices of faces in a **new** intersecting pair in any key frame (a pair of faces that
-  does not already intersect in the reference, frame 0), grown by ``ring`` rings;
-* optionally, near-contact vertices (:mod:`posefix.contacts`) of any key frame that are not
-  already in contact in the reference, grown by ``ring`` rings;
+* the vertices of every face that intersects in any key frame, grown by ``ring`` rings;
+* optionally, near-contact vertices (:mod:`posefix.contacts`) of any key frame, grown the same way
+  (beyond S0);
 * vertices the user excludes by hand (S0 Fig. 4b), without ring growth.
 
-Then, as in S0 §4.3, vertices of faces that already intersect in the reference are added back
-unless they belong to a new pair themselves or were excluded by hand: the reference's own
-intersections are reproduced, not repaired.
+Then, as in S0 §4.3, the vertices of faces that already intersect in the reference are added back
+(unless excluded by hand): the reference's own intersections are reproduced, not repaired, and do
+not cost the rest of the mesh its constraints. Their surrounding rings stay excluded.
 
 The reason each vertex left or re-entered ``V_C`` is kept as a bit field (``EXCLUDED_*`` flags).
 """
@@ -21,7 +20,7 @@ from posefix.intersections import intersecting_faces
 from posefix.topology import grow_rings, vertex_adjacency
 
 EXCLUDED_INTERSECTION = 1
-"""Vertex of a face in a new intersecting pair in some key frame."""
+"""Vertex of a face that intersects in some key frame."""
 EXCLUDED_RING = 2
 """Within ``ring`` rings of an intersecting or contact vertex."""
 EXCLUDED_CONTACT = 4
@@ -29,7 +28,7 @@ EXCLUDED_CONTACT = 4
 EXCLUDED_MANUAL = 8
 """Excluded by the user."""
 READDED_REFERENCE = 16
-"""Vertex of a face that intersects in the reference, kept in ``V_C``."""
+"""Vertex of a face that intersects in the reference: in ``V_C`` unless excluded by hand."""
 
 
 def new_pairs(pairs, reference_pairs):
@@ -65,24 +64,18 @@ def constraint_mask(F, n, frame_pairs, ring=1, contacts=None, exclude=()):
         Bit field of ``EXCLUDED_*`` / ``READDED_REFERENCE`` flags.
     """
     m = len(F)
-    reference = frame_pairs[0]
-    hit_faces = np.zeros(m, dtype=bool)
-    for pairs in frame_pairs[1:]:
-        hit_faces |= intersecting_faces(new_pairs(pairs, reference), m)
     hit = np.zeros(n, dtype=bool)
-    hit[F[hit_faces].ravel()] = True
-    contact = np.zeros(n, dtype=bool)
-    if contacts is not None:
-        contact = contacts[1:].any(axis=0) & ~contacts[0]
+    for pairs in frame_pairs:
+        hit[F[intersecting_faces(pairs, m)].ravel()] = True
+    contact = contacts.any(axis=0) if contacts is not None else np.zeros(n, dtype=bool)
     manual = np.zeros(n, dtype=bool)
     manual[np.asarray(exclude, dtype=np.int64)] = True
     seeds = hit | contact
     ringed = grow_rings(seeds, vertex_adjacency(F, n), ring) & ~seeds
-    ref_faces = intersecting_faces(reference, m)
     readd = np.zeros(n, dtype=bool)
-    readd[F[ref_faces].ravel()] = True
-    readd &= ~hit & ~manual
-    excluded = (seeds | ringed | manual) & ~readd
+    readd[F[intersecting_faces(frame_pairs[0], m)].ravel()] = True
+    readd &= ~manual
+    mask = (~(seeds | ringed | manual)) | readd
     reasons = (hit * EXCLUDED_INTERSECTION | ringed * EXCLUDED_RING | contact * EXCLUDED_CONTACT
                | manual * EXCLUDED_MANUAL | readd * READDED_REFERENCE).astype(np.uint8)
-    return ~excluded, reasons
+    return mask, reasons

@@ -1,8 +1,8 @@
 """Plumbing shared by the stage scripts in ``stages/``: arguments, logging, errors, threads, timers.
 
 A stage script defines ``main(args, log)`` and ends with ``run_stage(parser, main)``. Input
-problems (:class:`posefix.io.InputError`) end the stage with one line on stderr and exit code 2;
-an interrupted stage exits 130. Outputs are written atomically by the stages, so neither leaves a
+problems (:class:`posefix.io.InputError`) end the stage with one line on stderr and exit code 2,
+file-system errors (``OSError``) with one line and exit code 1; an interrupted stage exits 130. Outputs are written atomically by the stages, so neither leaves a
 partial file behind.
 """
 
@@ -42,6 +42,11 @@ def run_stage(parser, main, argv=None):
         log.debug("input error", exc_info=True)
         print(f"posefix {args.stage}: error: {exc}", file=sys.stderr)
         sys.exit(EXIT_INPUT_ERROR)
+    except OSError as exc:  # e.g. an output folder that cannot be created or written
+        log.debug("system error", exc_info=True)
+        where = f"{exc.filename}: " if exc.filename else ""
+        print(f"posefix {args.stage}: error: {where}{exc.strerror or exc}", file=sys.stderr)
+        sys.exit(1)
     except KeyboardInterrupt:
         print(f"posefix {args.stage}: interrupted; no output written", file=sys.stderr)
         sys.exit(130)

@@ -48,6 +48,16 @@ def vertex_areas(V, F):
     return np.bincount(F.ravel(), weights=third, minlength=len(V))
 
 
+def vertex_normals(V, F):
+    """Area-weighted unit vertex normals, (n, 3) float; zero for vertices on no face."""
+    N = np.zeros((len(V), 3))
+    cross = face_cross(V, F)
+    for i in range(3):
+        np.add.at(N, F[:, i], cross)
+    length = np.linalg.norm(N, axis=1, keepdims=True)
+    return N / np.where(length > 0, length, 1.0)
+
+
 def point_triangle_distance(P, A, B, C):
     """Euclidean distance from points to paired closed triangles (Ericson, Real-Time Collision
     Detection, 5.1.5), vectorized.

@@ -86,9 +86,12 @@ def write_artifact(path, stage, datasets, *, params, inputs, timings, metrics=No
         fh.attrs["inputs"] = json.dumps([str(p) for p in inputs])
         for name, value in datasets.items():
             value = np.asarray(value)
-            big = value.nbytes >= _COMPRESS_BYTES
-            ds = fh.create_dataset(name, data=value, compression="gzip" if big else None,
-                                   compression_opts=1 if big else None, shuffle=big)
+            if value.dtype.kind == "U":  # text: variable-length UTF-8
+                ds = fh.create_dataset(name, data=value.astype(object), dtype=h5py.string_dtype())
+            else:
+                big = value.nbytes >= _COMPRESS_BYTES
+                ds = fh.create_dataset(name, data=value, compression="gzip" if big else None,
+                                       compression_opts=1 if big else None, shuffle=big)
             if name in docs:
                 ds.attrs["units"], ds.attrs["description"] = docs[name]
         group = fh.create_group("timings")

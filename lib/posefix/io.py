@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 import trimesh
 
-from posefix.geometry import bbox_diagonal, face_areas
+from posefix.geometry import bbox_diagonal, face_areas, vertex_normals
 
 FORMATS = ("obj", "ply", "off")
 DEGENERATE_AREA_REL = 1e-14
@@ -107,7 +107,7 @@ def discover_library(folder, reference=None, poses=None, name=None):
     folder = Path(folder)
     if not folder.is_dir():
         raise InputError(folder, "not a folder")
-    files = [mesh_file(p) for p in sorted(folder.iterdir()) if p.is_file()]
+    files = [mesh_file(p) for p in sorted(folder.iterdir()) if p.is_file() or p.is_symlink()]
     files = [f for f in files if f is not None]
     if not files:
         raise InputError(folder, "no mesh files (.obj, .ply, .off, optionally .gz)")
@@ -174,6 +174,8 @@ def read_mesh(path):
         raise InputError(path, "unknown mesh format (expected .obj, .ply, .off, optionally .gz)")
     data = _read_bytes(mf)
     declared = _declared_counts(data, mf.fmt)
+    if mf.fmt == "obj":
+        _check_obj_indices(path, data)
     try:
         kwargs = {"maintain_order": True} if mf.fmt == "obj" else {}
         mesh = trimesh.load(io.BytesIO(data), file_type=mf.fmt, process=False, force="mesh", **kwargs)
@@ -221,6 +223,14 @@ def _declared_counts(data, fmt):
     return (int(nv.group(1)) if nv else None, int(nf.group(1)) if nf else None)
 
 
+def _check_obj_indices(path, data):
+    """OBJ indices start at 1; trimesh would silently renumber a 0, so reject it here."""
+    for number, line in enumerate(data.splitlines(), 1):
+        tokens = line.split()
+        if tokens and tokens[0] == b"f" and any(t.split(b"/")[0] in (b"0", b"-0") for t in tokens[1:]):
+            raise InputError(path, f"line {number}: face vertex index 0 (OBJ indices start at 1)")
+
+
 def _check_mesh(path, V, F, declared):
     if len(V) == 0:
         raise InputError(path, "no vertices")
@@ -266,6 +276,20 @@ def check_pose(path, V, F, V_ref, F_ref):
                                f"{F[f].tolist()} vs {F_ref[f].tolist()})")
 
 
+def read_reference(path):
+    """Read and validate a reference mesh: (V (n, 3) float64, F (m, 3) int64)."""
+    V, F = read_mesh(path)
+    check_reference(path, V, F)
+    return V, F
+
+
+def read_pose(path, V_ref, F_ref):
+    """Read a target pose and check it against the reference; returns its (n, 3) vertices."""
+    V, F = read_mesh(path)
+    check_pose(path, V, F, V_ref, F_ref)
+    return V
+
+
 def read_pose_pair(reference_path, target_path):
     """Read and validate a reference and one target pose.
 
@@ -274,11 +298,8 @@ def read_pose_pair(reference_path, target_path):
     V_ref, V_tgt : (n, 3) float64
     F : (m, 3) int64
     """
-    V_ref, F = read_mesh(reference_path)
-    check_reference(reference_path, V_ref, F)
-    V_tgt, F_tgt = read_mesh(target_path)
-    check_pose(target_path, V_tgt, F_tgt, V_ref, F)
-    return V_ref, V_tgt, F
+    V_ref, F = read_reference(reference_path)
+    return V_ref, read_pose(target_path, V_ref, F), F
 
 
 def write_mesh(path, V, F, ply_encoding="binary_little_endian"):
@@ -307,12 +328,55 @@ def write_mesh(path, V, F, ply_encoding="binary_little_endian"):
     atomic_write_bytes(path, data)
 
 
-def ply_encoding(path):
-    """``ascii`` or ``binary_little_endian``/``binary_big_endian`` from a PLY file's header."""
-    mf = mesh_file(path)
-    head = _read_bytes(mf)[:512]
-    m = re.search(rb"format\s+(\w+)", head)
-    return m.group(1).decode() if m else "binary_little_endian"
+def write_like(path, V, F, source):
+    """Write new vertex positions in the exact format of the mesh file they came from.
+
+    * OBJ: the source text is copied line by line; only ``v`` lines get the new coordinates (extra
+      values such as vertex colours are kept) and, when the source has one ``vn`` per vertex, the
+      ``vn`` lines get recomputed area-weighted normals. Faces, texture coordinates, groups and
+      materials stay byte-identical.
+    * PLY: same encoding as the source (ascii or binary, endianness), float64 coordinates; other
+      vertex properties are not carried over.
+    * OFF: plain OFF.
+
+    Parameters
+    ----------
+    path : str or Path
+        Output file; must have the source's extension(s).
+    V : (n, 3) float
+    F : (m, 3) int
+        The source's faces (only used for PLY/OFF and the normals).
+    source : str or Path
+        The input mesh file.
+    """
+    src, dst = mesh_file(source), mesh_file(path)
+    if dst is None or (dst.fmt, dst.gz) != (src.fmt, src.gz):
+        raise InputError(path, f"must have the same format as {source} ({src.suffix})")
+    if src.fmt != "obj":
+        head = _read_bytes(src)[:512]
+        m = re.search(rb"format\s+(\w+)", head) if src.fmt == "ply" else None
+        write_mesh(path, V, F, ply_encoding=m.group(1).decode() if m else "binary_little_endian")
+        return
+    data = _obj_like(_read_bytes(src), np.asarray(V, dtype=np.float64), vertex_normals(V, F))
+    atomic_write_bytes(path, gzip.compress(data, compresslevel=6, mtime=0) if src.gz else data)
+
+
+def _obj_like(data, V, normals):
+    lines = data.splitlines(keepends=True)
+    n_vn = sum(1 for line in lines if line.split()[:1] == [b"vn"])
+    out, iv, ivn = [], 0, 0
+    for line in lines:
+        tokens = line.split()
+        end = line[len(line.rstrip(b"\r\n")):]
+        if tokens[:1] == [b"v"]:
+            extra = b"".join(b" " + t for t in tokens[4:])
+            line = (b"v %.17g %.17g %.17g" % tuple(V[iv])) + extra + end
+            iv += 1
+        elif tokens[:1] == [b"vn"] and n_vn == len(V):
+            line = (b"vn %.9g %.9g %.9g" % tuple(normals[ivn])) + end
+            ivn += 1
+        out.append(line)
+    return b"".join(out)
 
 
 def atomic_write_bytes(path, data):

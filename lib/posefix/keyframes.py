@@ -26,7 +26,7 @@ import scipy.sparse as sp
 from scipy.sparse.linalg import splu
 
 from posefix.geometry import vertex_areas
-from posefix.laplacian import face_mass, gradient_operator
+from posefix.laplacian import cotangent_laplacian, face_mass, gradient_operator
 from posefix.rotations import (kabsch, polar_decomposition, rotation_exp, rotation_log,
                                unwrap_rotation_vectors)
 from posefix.topology import face_adjacency, vertex_components
@@ -87,7 +87,9 @@ def prepare(V_ref, V_tgt, F, align=True, unwrap=True):
     """
     n = len(V_ref)
     weights = vertex_areas(V_ref, F)
-    R_g, c_ref, c_tgt = kabsch(V_ref, V_tgt, weights) if align else (np.eye(3), *_centroids(V_ref, V_tgt, weights))
+    R_g, c_ref, c_tgt = kabsch(V_ref, V_tgt, weights)
+    if not align:
+        R_g = np.eye(3)
     aligned = (V_tgt - c_tgt) @ R_g + c_ref
     R, S = polar_decomposition(deformation_gradients(V_ref, aligned, F))
     omega = rotation_log(R)
@@ -95,9 +97,8 @@ def prepare(V_ref, V_tgt, F, align=True, unwrap=True):
     if unwrap:
         omega, turns = unwrap_rotation_vectors(omega, face_adjacency(F))
     labels, count = vertex_components(F, n)
-    G = gradient_operator(V_ref, F)
-    GtM = (G.T @ face_mass(V_ref, F)).tocsr()
-    L = (GtM @ G).tocsc()
+    GtM = (gradient_operator(V_ref, F).T @ face_mass(V_ref, F)).tocsr()
+    L = cotangent_laplacian(V_ref, F)
     anchors = np.unique(labels, return_index=True)[1]
     free = np.setdiff1d(np.arange(n), anchors)
     solver = splu(L[free][:, free].tocsc(), permc_spec="MMD_AT_PLUS_A") if len(free) else None
@@ -156,11 +157,6 @@ def _frames(V, F):
     length = np.linalg.norm(n, axis=1, keepdims=True)
     n = n / np.sqrt(np.where(length > 0, length, 1.0))
     return np.stack([e1, e2, n], axis=2)
-
-
-def _centroids(V_ref, V_tgt, weights):
-    w = weights / weights.sum()
-    return w @ V_ref, w @ V_tgt
 
 
 def _component_centroids(X, labels, count, weights):

@@ -3,9 +3,9 @@
 The reference is a capsule along x (radius 0.5, cylinder length 6, hemispherical caps) with a
 smooth seeded bump pattern, clean of self-intersections. Two joints at ``x = -1`` and ``x = +1``
 split it into three bones; skinning weights blend linearly-smoothly over ``+-0.4`` around each joint.
-Each target pose bends one or both joints by 120-150 degrees, some with a twist about the bone,
-so linear blend skinning collapses the inner side of the joint into itself: the classic
-skinning artifact that S0 repairs (its Fig. 1 and 4).
+Each target pose bends one or both joints by 120-150 degrees plus a twist of the last bone about
+its axis (30-90 degrees), so linear blend skinning collapses the inner side of the joint into
+itself: the classic skinning artifact that S0 repairs (its Fig. 1 and 4).
 """
 
 from dataclasses import dataclass
@@ -37,9 +37,9 @@ class DemoPose:
 REFERENCE_NAME = "demo-reference"
 REFERENCE_SUFFIX = ".obj"
 POSES = (
-    DemoPose("demo-01", ".obj", (0.0, 0.0, 0.0), (0.0, 0.0, np.radians(135.0))),
+    DemoPose("demo-01", ".obj", (0.0, 0.0, 0.0), (0.0, 0.0, np.radians(135.0)), np.radians(30.0)),
     DemoPose("demo-02", ".ply", (0.0, np.radians(120.0), 0.0), (0.0, 0.0, 0.0), np.radians(60.0)),
-    DemoPose("demo-03", ".off.gz", (0.0, np.radians(-120.0), 0.0), (0.0, 0.0, np.radians(120.0))),
+    DemoPose("demo-03", ".off.gz", (0.0, np.radians(-120.0), 0.0), (0.0, 0.0, np.radians(120.0)), np.radians(45.0)),
     DemoPose("demo-04", ".obj.gz", (0.0, 0.0, 0.0), (0.0, 0.0, np.radians(150.0)), np.radians(90.0)),
 )
 """The demo's target poses, with the file format each is written in (to exercise every reader)."""

@@ -49,10 +49,14 @@ def grow_rings(mask, adjacency, rings):
     return grown
 
 
+def half_edges(F):
+    """The three edges of every face as sorted vertex pairs, (3 m, 2) int; rows 3f..3f+2 are face f's."""
+    return np.sort(F[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
+
+
 def edges(F):
     """Unique undirected edges, (e, 2) int64 with ``e[:, 0] < e[:, 1]``, sorted."""
-    E = np.sort(F[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
-    return np.unique(E, axis=0)
+    return np.unique(half_edges(F), axis=0)
 
 
 def face_adjacency(F):
@@ -64,7 +68,7 @@ def face_adjacency(F):
         Unique face index pairs ``(f, g)`` with ``f < g``. The faces around a non-manifold edge
         (three or more) are chained in index order, which keeps them connected.
     """
-    E = np.sort(F[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
+    E = half_edges(F)
     face = np.repeat(np.arange(len(F)), 3)
     order = np.lexsort((face, E[:, 1], E[:, 0]))
     E, face = E[order], face[order]
