@@ -1,6 +1,6 @@
 # posefix: repair self-intersections in a pose library by space-time integration (S0).
 # Data flow, one pose at a time after the library is validated:
-#   demo (only without --config library=...) -> validate -> keyframes -> classify
+#   demo (only without --config library=...) -> validate -> keyframes -> classify -> constraints -> fit
 # Rules only wire stage scripts (stages/<rule>.py); the math is in lib/posefix/.
 from snakemake.utils import min_version
 
@@ -23,7 +23,7 @@ localrules:
 
 rule all:
     input:
-        expand(f"{RESULTS}/{{pose}}/classify.h5", pose=POSES),
+        expand(f"{RESULTS}/{{pose}}/fit.h5", pose=POSES),
 
 
 rule demo:
@@ -116,3 +116,48 @@ rule classify:
         "{params.python:q} {params.script:q} --keyframes {input.keyframes:q} --ring {params.ring}"
         " --contact {params.contact} --contact-radius {params.radius} {params.exclude}"
         " --threads {threads} --out {output:q} --log {log:q}"
+
+
+rule constraints:
+    input:
+        keyframes=rules.keyframes.output[0],
+        classify=rules.classify.output[0],
+    output:
+        f"{RESULTS}/{{pose}}/constraints.h5",
+    params:
+        samples=config["constraints"]["samples"],
+        tau=config["constraints"]["tau"],
+        tangents=config["constraints"]["tangents"],
+        python=PYTHON,
+        script=stage_script("constraints"),
+    threads: config["constraints"]["threads"]
+    log:
+        f"{RESULTS}/logs/{{pose}}/constraints.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/{{pose}}/constraints.tsv"
+    shell:
+        "{params.python:q} {params.script:q} --keyframes {input.keyframes:q} --classify {input.classify:q}"
+        " --samples {params.samples} --tau {params.tau} --tangents {params.tangents}"
+        " --threads {threads} --out {output:q} --log {log:q}"
+
+
+rule fit:
+    input:
+        rules.constraints.output[0],
+    output:
+        f"{RESULTS}/{{pose}}/fit.h5",
+    params:
+        options=fit_options,
+        checkpoint=lambda wildcards, output: output[0].replace(".h5", ".checkpoint"),
+        python=PYTHON,
+        script=stage_script("fit"),
+    threads: config["fit"]["threads"]
+    resources:
+        mem_mb=int(1000 * config["fit"]["memory_gb"]) + 1000,
+    log:
+        f"{RESULTS}/logs/{{pose}}/fit.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/{{pose}}/fit.tsv"
+    shell:
+        "{params.python:q} {params.script:q} --constraints {input:q} {params.options}"
+        " --checkpoint {params.checkpoint:q} --threads {threads} --out {output:q} --log {log:q}"

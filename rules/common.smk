@@ -25,7 +25,7 @@ def _typed(value):
     return value
 
 
-for _section in ("demo", "keyframes", "classify"):
+for _section in ("demo", "keyframes", "classify", "constraints", "fit"):
     if isinstance(config.get(_section), dict):
         config[_section] = _typed(config[_section])
 validate(config, "../schemas/config.schema.yaml")
@@ -107,3 +107,11 @@ def exclude_files(wildcards):
 def flag(enabled, option):
     """``option`` when a boolean config value is false, else nothing (for --no-* switches)."""
     return "" if enabled else option
+
+
+def fit_options(wildcards):
+    """Command-line options of the fit stage from config['fit']."""
+    c = config["fit"]
+    return (f"--eps-rel {c['eps_rel']} --eps-rms-rel {c['eps_rms_rel']} --max-centers {c['max_centers']}"
+            f" --candidates {c['candidates']} --batch {c['batch']} --selection {c['selection']}"
+            f" --update {c['update']} --memory-gb {c['memory_gb']}")

@@ -11,6 +11,8 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "lib"))
 
+import posefix  # noqa: E402,F401  (runtime defaults before numpy)
+
 import time  # noqa: E402
 
 import numpy as np  # noqa: E402
@@ -40,7 +42,7 @@ def build_parser():
     parser.add_argument("--keyframes", required=True, help="keyframes.h5 of the pose")
     parser.add_argument("--out", required=True, help="classify.h5 to write")
     parser.add_argument("--ring", type=int, default=1, help="rings removed around intersecting vertices")
-    parser.add_argument("--contact", type=float, default=0.0,
+    parser.add_argument("--contact", type=float, default=0.02,
                         help="near-contact distance relative to the bbox diagonal (0 = off)")
     parser.add_argument("--contact-radius", type=float, default=0.1,
                         help="geodesic neighbourhood radius relative to the bbox diagonal")

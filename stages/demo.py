@@ -10,6 +10,8 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "lib"))
 
+import posefix  # noqa: E402,F401  (runtime defaults before numpy)
+
 from posefix import synth  # noqa: E402
 from posefix.cli import Timings, run_stage, stage_parser  # noqa: E402
 from posefix.intersections import intersecting_faces, self_intersecting_pairs  # noqa: E402

@@ -10,6 +10,8 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "lib"))
 
+import posefix  # noqa: E402,F401  (runtime defaults before numpy)
+
 import argparse  # noqa: E402
 
 import numpy as np  # noqa: E402

@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import trimesh
+from threadpoolctl import threadpool_limits
 
 ROOT = Path(__file__).resolve().parents[1]
 DATA = Path(os.environ.get("POSEFIX_DATA", ROOT.parent / "shared" / "data"))
@@ -41,3 +42,8 @@ def demo():
     """The demo library in memory: (V_ref, F, poses dict)."""
     from posefix.synth import demo_library
     return demo_library()
+
+
+# OpenBLAS threads made small dense operations up to 17x slower on the 2-core CI machines
+# (measured on the greedy fit); the stages cap BLAS to their rule's threads, the tests to one.
+threadpool_limits(1)

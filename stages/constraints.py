@@ -1,0 +1,67 @@
+"""Stage constraints: space-time interpolation constraints of the vector field (S0 §4.1).
+
+Every vertex of V_C follows a C1 cubic trajectory through its key-frame positions (tangents by
+finite differences, S0, or of a per-vertex cubic spline); sampling it at t_i = i/s gives the
+space-time points y = (c(t_i), tau t_i) and tangents c'(t_i) the field must interpolate. See
+``posefix.constraints``.
+"""
+
+import sys
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "lib"))
+
+import posefix  # noqa: E402,F401  (runtime defaults before numpy)
+from posefix.cli import Timings, run_stage, stage_parser  # noqa: E402
+from posefix.constraints import spacetime_constraints  # noqa: E402
+from posefix.geometry import bbox_diagonal  # noqa: E402
+from posefix.h5io import read_artifact, write_artifact  # noqa: E402
+from posefix.io import InputError  # noqa: E402
+
+DOCS = {
+    "points": ("length", "space-time constraint points (c(t_i), tau t_i), (N, 4) float64"),
+    "values": ("length/time", "trajectory tangents c'(t_i) to interpolate, (N, 3) float64"),
+    "vertex": ("index", "vertex of each constraint, (N,) int64"),
+    "time": ("1", "sample time t_i of each constraint, (N,) float64"),
+}
+
+
+def build_parser():
+    parser = stage_parser("constraints", __doc__)
+    parser.add_argument("--keyframes", required=True, help="keyframes.h5 of the pose")
+    parser.add_argument("--classify", required=True, help="classify.h5 of the pose (V_C)")
+    parser.add_argument("--out", required=True, help="constraints.h5 to write")
+    parser.add_argument("--samples", type=int, default=12, help="s: constraints at t_i = i/s, i = 0..s")
+    parser.add_argument("--tau", type=float, default=0.3,
+                        help="time-axis scale relative to the reference's bbox diagonal")
+    parser.add_argument("--tangents", choices=("hermite", "spline"), default="spline",
+                        help="knot tangents: finite differences (S0) or per-vertex cubic spline")
+    return parser
+
+
+def main(args, log):
+    if args.samples < 2 or args.tau <= 0:
+        raise InputError("arguments", "--samples must be >= 2 and --tau > 0")
+    timings = Timings()
+    with timings.step("read", log):
+        kf, _ = read_artifact(args.keyframes, "keyframes", ["frames", "t", "reference"])
+        cl, _ = read_artifact(args.classify, "classify", ["mask"])
+    if cl["mask"].shape[0] != kf["reference"].shape[0]:
+        raise InputError(args.classify, "V_C mask does not match the key frames' vertex count")
+    d = bbox_diagonal(kf["reference"])
+    with timings.step("sample", log):
+        points, values, vertex, time = spacetime_constraints(kf["frames"], kf["t"], cl["mask"], args.samples,
+                                                             args.tau * d, args.tangents)
+    log.info("%d constraints: %d vertices x %d times, tau = %.3g (%.3g d), %s tangents", len(points),
+             cl["mask"].sum(), args.samples + 1, args.tau * d, args.tau, args.tangents)
+    write_artifact(
+        args.out, "constraints", {"points": points, "values": values, "vertex": vertex, "time": time},
+        params={"samples": args.samples, "tau": args.tau, "tangents": args.tangents},
+        inputs=[args.keyframes, args.classify], timings=timings,
+        metrics={"constraints": len(points), "constraint_vertices": int(cl["mask"].sum()),
+                 "samples": args.samples, "tau": args.tau * d, "bbox_diagonal": d},
+        docs=DOCS)
+
+
+if __name__ == "__main__":
+    run_stage(build_parser(), main)

@@ -1,0 +1,148 @@
+"""Stage fit: greedy RBF fit of the space-time vector field f: R^4 -> R^3 (S0 §4.2).
+
+Farthest-point greedy centre selection within the worst candidates, blocked Cholesky updates of
+the null-space-projected system (or full LU refactorization), a condition estimate every
+iteration, and a crash-safe checkpoint after every iteration: rerunning after a kill, or with
+another stopping rule on the same constraints, continues from the stored factors and gives the
+same result as an uninterrupted fit. See ``posefix.fit`` and ``posefix.factorization``.
+"""
+
+import sys
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "lib"))
+
+import json  # noqa: E402
+
+import posefix  # noqa: E402,F401  (runtime defaults before numpy)
+import numpy as np  # noqa: E402
+
+from posefix import checkpoint  # noqa: E402
+from posefix.cli import Timings, run_stage, stage_parser  # noqa: E402
+from posefix.factorization import FactorizationError  # noqa: E402
+from posefix.fit import FitSettings, iterate, resume_fit, start_fit, truncate_history  # noqa: E402
+from posefix.h5io import config_hash, read_artifact, write_artifact  # noqa: E402
+from posefix.io import InputError, file_sha256  # noqa: E402
+
+DOCS = {
+    "centers": ("length", "RBF centres gamma_j in space-time, (n, 4) float64"),
+    "center_index": ("index", "constraint index of each centre, in selection order, (n,) int64"),
+    "weights": ("length/time", "kernel weights w_j in normalized coordinates, (n, 3) float64"),
+    "poly": ("length/time", "quadratic polynomial coefficients (1, z_i, z_i z_j) in normalized coordinates, (15, 3) float64"),
+    "shift": ("length", "normalization z = (y - shift) / scale, (4,) float64"),
+    "scale": ("length", "normalization scale, () float64"),
+    "residual": ("length/time", "f(y) - c' at every constraint after the last iteration, (N, 3) float64"),
+}
+HISTORY = {
+    "centers": ("count", "centres after each iteration, (I,) int64"),
+    "max_error": ("length/time", "max residual norm after each iteration, (I,) float64"),
+    "rms_error": ("length/time", "rms residual norm after each iteration, (I,) float64"),
+    "condition": ("1", "estimate of kappa_1 of the (n+15) saddle-point system, (I,) float64"),
+    "dropped": ("count", "candidates dropped as near-duplicates of existing centres, (I,) int64"),
+    "seconds_evaluate": ("s", "residual evaluation per iteration, (I,) float64"),
+    "seconds_select": ("s", "candidate and centre selection per iteration, (I,) float64"),
+    "seconds_update": ("s", "kernel columns and factorization update per iteration, (I,) float64"),
+    "seconds_solve": ("s", "solve for weights and polynomial per iteration, (I,) float64"),
+    "seconds_condition": ("s", "condition estimate per iteration, (I,) float64"),
+}
+FACTORS = {
+    "pi_p": "polynomial basis at the 15 P-centres, (15, 15)",
+    "phi_pp": "kernel among the P-centres, (15, 15)",
+    "G": "null-space basis Pi_P^-T Pi_R^T, (15, n-15)",
+    "H": "kernel between all centres and the P-centres, (n, 15)",
+    "Pi": "polynomial basis at the centres, (n, 15)",
+    "S": "off-diagonal part of a block row of the Cholesky factor of B, (m_k, r_k)",
+    "L": "diagonal block of the Cholesky factor of B (lower triangular), (m_k, m_k)",
+}
+
+
+def build_parser():
+    parser = stage_parser("fit", __doc__)
+    parser.add_argument("--constraints", required=True, help="constraints.h5 of the pose")
+    parser.add_argument("--out", required=True, help="fit.h5 to write")
+    parser.add_argument("--checkpoint", default=None, help="checkpoint folder (default: <out> with .checkpoint)")
+    parser.add_argument("--eps-rel", type=float, default=1e-4, help="stop at max error < eps_rel * bbox diagonal")
+    parser.add_argument("--eps-rms-rel", type=float, default=0.0, help="stop at rms error < this * diagonal (0: off)")
+    parser.add_argument("--max-centers", type=int, default=4000, help="stop at this many centres")
+    parser.add_argument("--candidates", type=int, default=1024, help="p: worst constraints considered per iteration")
+    parser.add_argument("--batch", type=int, default=128, help="m: centres added per iteration")
+    parser.add_argument("--selection", choices=("fps", "worst"), default="fps",
+                        help="fps: farthest points within the candidates (S0); worst: the m worst (Carr et al.)")
+    parser.add_argument("--update", choices=("blocked", "full"), default="blocked",
+                        help="blocked Cholesky updates or full LU refactorization every iteration")
+    parser.add_argument("--memory-gb", type=float, default=4.0, help="budget of the kernel cache")
+    return parser
+
+
+def main(args, log):
+    if args.max_centers < 16 or args.batch < 1 or args.candidates < args.batch or args.eps_rel < 0:
+        raise InputError("arguments", "need --max-centers >= 16, --batch >= 1, --candidates >= --batch, --eps-rel >= 0")
+    timings = Timings()
+    with timings.step("read", log):
+        data, attrs = read_artifact(args.constraints, "constraints", ["points", "values"])
+    d = float(attrs["metrics"]["bbox_diagonal"])
+    settings = FitSettings(eps=args.eps_rel * d, eps_rms=args.eps_rms_rel * d, max_centers=args.max_centers,
+                           candidates=args.candidates, batch=args.batch, selection=args.selection,
+                           update=args.update, memory_bytes=args.memory_gb * 1e9)
+    folder = Path(args.checkpoint or Path(args.out).with_suffix(".checkpoint"))
+    key = config_hash({"constraints": file_sha256(args.constraints), **settings.selection_key()})
+    points, values = data["points"], data["values"]
+    log.info("%d constraints; eps = %.3g (%.3g d), max %d centres, %s selection, %s update",
+             len(points), settings.eps, args.eps_rel, args.max_centers, args.selection, args.update)
+    with timings.step("start", log):
+        fit, resumed = _start_or_resume(points, values, settings, folder, key, args.constraints, log)
+    previous, first = (fit.state() if resumed else None), True
+
+    def on_iteration(fit, record):
+        nonlocal previous, first
+        if first:  # deltas of a longer or different stored fit go before the first new commit
+            checkpoint.truncate(folder, record["iteration"])
+            first = False
+        previous = checkpoint.save_iteration(folder, key, _settings_dict(settings), fit, previous)
+
+    with timings.step("iterate", log):
+        reason = iterate(fit, on_iteration=on_iteration, log=log)
+    last = fit.history[-1]
+    log.info("stopped (%s) at %d centres: max error %.3g d, rms %.3g d, max kappa %.3g", reason, fit.n,
+             last["max_error"] / d, last["rms_error"] / d, max(r["condition"] for r in fit.history))
+    history = {f"history/{k}": np.array([r[k] for r in fit.history]) for k in HISTORY}
+    factors = {f"factors/{k[len('solver/'):]}": v for k, v in fit.state().items() if k.startswith("solver/")}
+    docs = dict(DOCS, **{f"history/{k}": v for k, v in HISTORY.items()},
+                **{k: ("1", FACTORS[k.split("/")[1]] + " float64") for k in factors})
+    write_artifact(
+        args.out, "fit",
+        {"centers": points[fit.order], "center_index": fit.order, "weights": fit.weights, "poly": fit.poly,
+         "shift": fit.shift, "scale": np.float64(fit.scale), "residual": fit.residual, **history, **factors},
+        params=_settings_dict(settings) | {"eps_rel": args.eps_rel, "eps_rms_rel": args.eps_rms_rel},
+        inputs=[args.constraints], timings=timings,
+        metrics={"centers": fit.n, "iterations": len(fit.history), "stop_reason": reason,
+                 "max_error_rel": last["max_error"] / d, "rms_error_rel": last["rms_error"] / d,
+                 "max_condition": max(r["condition"] for r in fit.history), "bbox_diagonal": d,
+                 "resumed_iterations": resumed,
+                 "seconds": sum(timings.get(k, 0.0) for k in ("start", "iterate"))},
+        docs=docs)
+
+
+def _start_or_resume(points, values, settings, folder, key, source, log):
+    """A fit continuing the checkpoint where that is exact, else a fresh one.
+
+    Returns the fit and how many stored iterations it reuses.
+    """
+    stored, history = checkpoint.load(folder, key)
+    keep = truncate_history(history, settings) if stored is not None else 0
+    try:
+        if keep:
+            log.info("resuming from checkpoint %s: %d of %d stored iterations (%d centres)", folder, keep,
+                     len(history), history[keep - 1]["centers"])
+            return resume_fit(points, values, settings, stored, history[:keep]), keep
+        return start_fit(points, values, settings), 0
+    except FactorizationError as exc:
+        raise InputError(source, str(exc)) from None
+
+
+def _settings_dict(settings):
+    return json.loads(json.dumps(settings.__dict__))
+
+
+if __name__ == "__main__":
+    run_stage(build_parser(), main)
