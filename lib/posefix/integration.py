@@ -25,7 +25,7 @@ _B4 = np.array([5179 / 57600, 0.0, 7571 / 16695, 393 / 640, -92097 / 339200, 187
 _E = _B5 - _B4
 
 
-def rk45(velocity, X0, rtol=1e-6, atol=1e-6, h0=0.05, max_steps=10000):
+def rk45(velocity, X0, rtol=1e-6, atol=1e-6, h0=0.05, max_steps=10000, sample_times=(0.0, 1.0)):
     """Integrate ``dx/dt = velocity(x, t)`` for many points from ``t = 0`` to ``t = 1``.
 
     Parameters
@@ -40,11 +40,16 @@ def rk45(velocity, X0, rtol=1e-6, atol=1e-6, h0=0.05, max_steps=10000):
         First step size (time units).
     max_steps : int
         Cap on the attempted steps per point.
+    sample_times : sequence of float
+        Increasing times in [0, 1] at which positions are recorded; steps are shortened to land
+        on them exactly.
 
     Returns
     -------
     X1 : (n, 3) float
         Positions at ``t = 1``.
+    samples : (S, n, 3) float
+        Positions at the sample times.
     steps : (n,) int
         Accepted steps per point.
     rejected : (n,) int
@@ -52,14 +57,23 @@ def rk45(velocity, X0, rtol=1e-6, atol=1e-6, h0=0.05, max_steps=10000):
     """
     X = np.array(X0, dtype=np.float64)
     n = len(X)
+    times = np.asarray(sample_times, dtype=np.float64)
+    samples = np.empty((len(times), n, 3))
     t = np.zeros(n)
     h = np.full(n, float(h0))
     steps = np.zeros(n, dtype=np.int64)
     rejected = np.zeros(n, dtype=np.int64)
+    nxt = np.zeros(n, dtype=np.int64)
+    while (nxt < len(times)).any() and times[min(nxt.min(), len(times) - 1)] <= 0.0:
+        hit = (nxt < len(times)) & (times[np.minimum(nxt, len(times) - 1)] <= 0.0)
+        samples[nxt[hit], np.flatnonzero(hit)] = X[hit]
+        nxt[hit] += 1
     k1 = velocity(X, t)
     active = np.arange(n)
     while len(active):
-        x, tt, hh = X[active], t[active], np.minimum(h[active], 1.0 - t[active])
+        x, tt = X[active], t[active]
+        target = np.where(nxt[active] < len(times), times[np.minimum(nxt[active], len(times) - 1)], 1.0)
+        hh = np.minimum(h[active], np.minimum(1.0, target) - tt)
         K = [k1[active]]
         for s in range(1, 7):
             xs = x + hh[:, None] * sum(a * K[j] for j, a in enumerate(_A[s]) if a != 0.0)
@@ -73,11 +87,15 @@ def rk45(velocity, X0, rtol=1e-6, atol=1e-6, h0=0.05, max_steps=10000):
         X[acc], t[acc], k1[acc] = x5[ok], tt[ok] + hh[ok], K[6][ok]   # FSAL: k7 is the next k1
         steps[acc] += 1
         rejected[active[~ok]] += 1
+        landed = acc[(nxt[acc] < len(times)) & (t[acc] >= target[ok] - 1e-12)]
+        t[landed] = times[nxt[landed]]
+        samples[nxt[landed], landed] = X[landed]
+        nxt[landed] += 1
         factor = np.clip(0.9 * np.maximum(err, 1e-10) ** -0.2, 0.2, 5.0)
         h[active] = hh * np.where(ok, factor, np.minimum(factor, 1.0))
         done = (t >= 1.0 - 1e-12) | (steps + rejected >= max_steps)
         active = np.flatnonzero(~done)
-    return X, steps, rejected
+    return X, samples, steps, rejected
 
 
 def field_velocity(field, tau, chunk=2048):
