@@ -2,7 +2,7 @@
 
 For each pose and each configuration (tau, tangents, samples, contact, max_centres, eps_rel) this
 runs classification (when contact differs), constraints, the greedy fit and a numpy RK45
-integration of every reference vertex, and reports centres, max kappa, fit error, fit and
+integration (OpenCL when available) of every reference vertex, and reports centres, max kappa, fit error, fit and
 integration seconds, new intersecting faces (intersecting in the result, not in the reference)
 and deviation from the target over V_C and its complement (relative to the bbox diagonal).
 Key frames come from ``results/<library>/<pose>/keyframes.h5`` (run the pipeline first).
@@ -30,6 +30,7 @@ from posefix.contacts import contact_vertices  # noqa: E402
 from posefix.fit import FitSettings, iterate, start_fit  # noqa: E402
 from posefix.geometry import bbox_diagonal  # noqa: E402
 from posefix.integration import field_velocity, rk45  # noqa: E402
+from posefix.integration_cl import rk45_opencl, select_device  # noqa: E402
 from posefix.intersections import intersecting_faces, self_intersecting_pairs  # noqa: E402
 
 BASE = {"tau": 0.1, "tangents": "spline", "samples": 12, "contact": 0.0, "max_centers": 4000, "eps_rel": 1e-4,
@@ -63,7 +64,11 @@ def run(results, pose, cfg, classify_cache):
     reason = iterate(fit)
     fit_s = time.perf_counter() - start
     start = time.perf_counter()
-    X, steps, _ = rk45(field_velocity(fit.field(), cfg["tau"] * d), V_ref, rtol=1e-6, atol=1e-5 * d)
+    device, _ = select_device("auto")
+    if device is not None:
+        X, _, steps, _ = rk45_opencl(device, fit.field(), cfg["tau"] * d, V_ref, [0.0, 1.0], 1e-9, 1e-7 * d)
+    else:
+        X, _, steps, _ = rk45(field_velocity(fit.field(), cfg["tau"] * d), V_ref, rtol=1e-9, atol=1e-7 * d)
     int_s = time.perf_counter() - start
     ref_faces = intersecting_faces(ref_pairs, len(F))
     rep_faces = intersecting_faces(self_intersecting_pairs(X, F), len(F))
