@@ -1,6 +1,7 @@
 # posefix: repair self-intersections in a pose library by space-time integration (S0).
 # Data flow, one pose at a time after the library is validated:
-#   demo (only without --config library=...) -> validate -> keyframes -> classify -> constraints -> fit
+#   demo (only without --config library=...) -> validate -> keyframes -> classify -> constraints
+#   -> fit -> integrate -> verify -> export (the repaired mesh); then summary over all poses
 # Rules only wire stage scripts (stages/<rule>.py); the math is in lib/posefix/.
 from snakemake.utils import min_version
 
@@ -19,11 +20,13 @@ wildcard_constraints:
 
 localrules:
     all,
+    summary,
 
 
 rule all:
     input:
-        expand(f"{RESULTS}/{{pose}}/fit.h5", pose=POSES),
+        [repaired_file(p) for p in POSES],
+        f"{REPORTS}/summary.json",
 
 
 rule demo:
@@ -161,3 +164,102 @@ rule fit:
     shell:
         "{params.python:q} {params.script:q} --constraints {input:q} {params.options}"
         " --checkpoint {params.checkpoint:q} --threads {threads} --out {output:q} --log {log:q}"
+
+
+rule integrate:
+    input:
+        fit=rules.fit.output[0],
+        constraints=rules.constraints.output[0],
+        keyframes=rules.keyframes.output[0],
+    output:
+        f"{RESULTS}/{{pose}}/integrate.h5",
+    params:
+        device=config["integrate"]["device"],
+        rtol=config["integrate"]["rtol"],
+        atol=config["integrate"]["atol_rel"],
+        h0=config["integrate"]["h0"],
+        vec=config["integrate"]["vec"],
+        python=PYTHON,
+        script=stage_script("integrate"),
+    threads: config["integrate"]["threads"]
+    log:
+        f"{RESULTS}/logs/{{pose}}/integrate.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/{{pose}}/integrate.tsv"
+    shell:
+        "{params.python:q} {params.script:q} --fit {input.fit:q} --constraints {input.constraints:q}"
+        " --keyframes {input.keyframes:q} --device {params.device} --rtol {params.rtol} --atol-rel {params.atol}"
+        " --h0 {params.h0} --vec {params.vec} --threads {threads} --out {output:q} --log {log:q}"
+
+
+rule verify:
+    input:
+        keyframes=rules.keyframes.output[0],
+        classify=rules.classify.output[0],
+        integrate=rules.integrate.output[0],
+        fit=rules.fit.output[0],
+    output:
+        f"{RESULTS}/{{pose}}/verify.h5",
+    params:
+        fallback=config["verify"]["fallback_eps"],
+        ring=config["verify"]["ring"],
+        rings=config["verify"]["max_rings"],
+        switches=" ".join(
+            [
+                flag(config["verify"]["repair_new"], "--no-repair-new"),
+                flag(config["verify"]["reproduce"], "--no-reproduce"),
+            ]
+        ),
+        python=PYTHON,
+        script=stage_script("verify"),
+    threads: config["verify"]["threads"]
+    log:
+        f"{RESULTS}/logs/{{pose}}/verify.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/{{pose}}/verify.tsv"
+    shell:
+        "{params.python:q} {params.script:q} --keyframes {input.keyframes:q} --classify {input.classify:q}"
+        " --integrate {input.integrate:q} --fit {input.fit:q} --fallback-eps {params.fallback}"
+        " --ring {params.ring} --max-rings {params.rings} {params.switches}"
+        " --threads {threads} --out {output:q} --log {log:q}"
+
+
+rule export:
+    input:
+        verify=rules.verify.output[0],
+        target=pose_file,
+    output:
+        f"{RESULTS}/repaired/{{pose}}{{suffix}}",
+    wildcard_constraints:
+        suffix=r"\.(obj|ply|off)(\.gz)?",
+    params:
+        python=PYTHON,
+        script=stage_script("export"),
+    threads: 1
+    log:
+        f"{RESULTS}/logs/{{pose}}/export{{suffix}}.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/{{pose}}/export{{suffix}}.tsv"
+    shell:
+        "{params.python:q} {params.script:q} --verify {input.verify:q} --target {input.target:q}"
+        " --out {output:q} --log {log:q}"
+
+
+rule summary:
+    input:
+        verify=expand(f"{RESULTS}/{{pose}}/verify.h5", pose=POSES),
+        meshes=[repaired_file(p) for p in POSES],
+    output:
+        json=f"{REPORTS}/summary.json",
+        md=f"{REPORTS}/summary.md",
+    params:
+        results=RESULTS,
+        poses=",".join(POSES),
+        python=PYTHON,
+        script=stage_script("summary"),
+    threads: 1
+    log:
+        f"{RESULTS}/logs/summary.log",
+    shell:
+        "{params.python:q} {params.script:q} --results {params.results:q} --poses {params.poses:q}"
+        " --out {output.json:q} --markdown {output.md:q} --log {log:q}"

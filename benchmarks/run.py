@@ -2,8 +2,9 @@
 
 Libraries: lion, cat and horse poses from ../shared/data (the demo library when that folder is
 absent, which the report says). Benchmarks so far: the self-intersection detector against
-pymeshlab (benchmarks/detector.py) on every key frame, and the RBF fit variants with the scipy peer
-check (benchmarks/fit.py).
+pymeshlab (benchmarks/detector.py) on every key frame, the RBF fit variants with the scipy peer
+check (benchmarks/fit.py), and the OpenCL integration against numpy on the lion poses
+(benchmarks/integrate.py).
 """
 
 import argparse
@@ -43,7 +44,7 @@ def main():
     note = "" if libraries else f"\n{DATA} is absent: ran on the built-in demo library.\n"
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    detector, fit = [], []
+    detector, fit, integrate = [], [], []
     for lib in libraries or [None]:
         config = ["--config", f"library={lib}"] if lib else []
         subprocess.run([sys.executable, "-m", "snakemake", "--cores", str(args.cores), *config],
@@ -56,11 +57,16 @@ def main():
         subprocess.run([sys.executable, str(ROOT / "benchmarks" / "fit.py"), "--library", name,
                         "--results", results, "--out", str(out / f"fit-{name}")], check=True, cwd=ROOT)
         fit.append((out / f"fit-{name}.md").read_text())
+        if name in ("lion-poses", "demo"):
+            subprocess.run([sys.executable, str(ROOT / "benchmarks" / "integrate.py"), "--library", name,
+                            "--results", results, "--out", str(out / f"integrate-{name}")], check=True, cwd=ROOT)
+            integrate.append((out / f"integrate-{name}.md").read_text())
     header = f"Machine: {machine()}.\n{note}\nCommand: `make bench` (benchmarks/run.py).\n\n"
     (out / "detector.md").write_text("# Self-intersection detector: posefix vs pymeshlab\n\n" + header
                                      + "\n".join(detector))
     (out / "fit.md").write_text("# RBF fit: S0 Table 1 on our machine\n\n" + header + PAPER + "\n".join(fit))
-    print(f"wrote {out / 'detector.md'} and {out / 'fit.md'}")
+    (out / "integrate.md").write_text("# Integration: OpenCL vs numpy\n\n" + header + "\n".join(integrate))
+    print(f"wrote {out / 'detector.md'}, {out / 'fit.md'} and {out / 'integrate.md'}")
 
 
 if __name__ == "__main__":

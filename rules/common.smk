@@ -25,7 +25,7 @@ def _typed(value):
     return value
 
 
-for _section in ("demo", "keyframes", "classify", "constraints", "fit"):
+for _section in ("demo", "keyframes", "classify", "constraints", "fit", "integrate", "verify"):
     if isinstance(config.get(_section), dict):
         config[_section] = _typed(config[_section])
 validate(config, "../schemas/config.schema.yaml")
@@ -75,6 +75,7 @@ _unknown = sorted(set(config["classify"]["exclude"]) - set(POSES))
 if _unknown:
     sys.exit(f"posefix: error: classify.exclude names pose(s) not in the library: {', '.join(_unknown)}")
 RESULTS = f"{config['results']}/{LIBRARY.name}"
+REPORTS = f"{config['reports']}/{LIBRARY.name}"
 IS_DEMO = config["library"] is None
 
 
@@ -115,3 +116,8 @@ def fit_options(wildcards):
     return (f"--eps-rel {c['eps_rel']} --eps-rms-rel {c['eps_rms_rel']} --max-centers {c['max_centers']}"
             f" --candidates {c['candidates']} --batch {c['batch']} --selection {c['selection']}"
             f" --update {c['update']} --memory-gb {c['memory_gb']}")
+
+
+def repaired_file(pose):
+    """Output path of the repaired mesh of a pose: results/<library>/repaired/<pose><input suffix>."""
+    return f"{RESULTS}/repaired/{pose}{LIBRARY.pose(pose).suffix}"

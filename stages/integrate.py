@@ -39,9 +39,9 @@ def build_parser():
     parser.add_argument("--out", required=True, help="integrate.h5 to write")
     parser.add_argument("--device", choices=("auto", "cpu", "gpu", "numpy"), default="auto",
                         help="OpenCL device type, or the numpy backend")
-    parser.add_argument("--rtol", type=float, default=1e-6, help="relative tolerance per step")
-    parser.add_argument("--atol-rel", type=float, default=1e-5,
-                        help="absolute tolerance per step relative to the bbox diagonal (0.1 eps)")
+    parser.add_argument("--rtol", type=float, default=1e-9, help="relative tolerance per step")
+    parser.add_argument("--atol-rel", type=float, default=1e-7,
+                        help="absolute tolerance per step relative to the bbox diagonal (1e-3 eps)")
     parser.add_argument("--h0", type=float, default=0.05, help="first step size (time units)")
     parser.add_argument("--vec", type=int, default=0, help="OpenCL vector width over centres (0: from the device)")
     return parser

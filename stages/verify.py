@@ -1,10 +1,10 @@
-"""Stage verify: check the repaired pose, fall back to the target where needed, write the mesh.
+"""Stage verify: check the repaired pose and fall back to the target where integration could not help.
 
 Counts intersecting faces of reference, target and repaired pose ("new": intersecting in the
-repaired pose, not in the reference), measures the deviation from the target over V_C and the rest,
-replaces regions by the target where integration could not reach it (S0 Fig. 9) or where new
-intersections appear that the target does not have (see ``posefix.verification``), and writes the
-repaired pose in the target's own file format with identical faces and vertex order.
+repaired pose, not in the reference), replaces regions by the target where integration could not
+reach it (S0 Fig. 9), untangles new intersections, puts the untouched constrained vertices exactly
+on their targets (blending the fit's residual into the rest), and measures the deviation from the
+target over V_C and the rest (see ``posefix.verification``). Stage ``export`` writes the mesh.
 """
 
 import sys
@@ -20,13 +20,18 @@ import numpy as np  # noqa: E402
 from posefix.cli import Timings, run_stage, stage_parser  # noqa: E402
 from posefix.h5io import read_artifact, write_artifact  # noqa: E402
 from posefix.intersections import intersecting_faces, self_intersecting_pairs  # noqa: E402
-from posefix.io import InputError, read_mesh, write_like  # noqa: E402
-from posefix.verification import REPLACED_FAR, REPLACED_NEW_INTERSECTION, deviation, fallback  # noqa: E402
+from posefix.topology import vertex_adjacency  # noqa: E402
+from posefix.verification import (REPLACED_PASS_THROUGH, REPRODUCED, deviation, fallback,  # noqa: E402
+                                  reproduce_targets)
 
 DOCS = {
+    "integrated_deviation": ("1", "|integrated - target| / bbox diagonal per vertex, before reproduction and "
+                                  "fallback, (n,) float64"),
     "repaired": ("length", "repaired vertex positions (after the fallback), (n, 3) float64"),
     "deviation": ("1", "|repaired - target| / bbox diagonal per vertex, (n,) float64"),
-    "replaced": ("flags", "fallback per vertex: 1 far from target (global intersection), 2 new intersection, (n,) uint8"),
+    "replaced": ("flags", "fallback per vertex: 1 target (key frames pass through, S0 Fig. 9), 2 target (new "
+                          "intersection), 4 smoothed, 8 rigid reference (new intersection), 16 reproduced (moved to the "
+                          "target, residual blended), (n,) uint8"),
     "new_faces": ("bool", "faces intersecting in the repaired pose but not in the reference, (m,) bool"),
     "pairs": ("index", "intersecting face pairs (f < g) of the repaired pose, (P, 2) int64"),
 }
@@ -38,14 +43,15 @@ def build_parser():
     parser.add_argument("--classify", required=True, help="classify.h5 of the pose (V_C, reference intersections)")
     parser.add_argument("--integrate", required=True, help="integrate.h5 of the pose")
     parser.add_argument("--fit", required=True, help="fit.h5 of the pose (eps)")
-    parser.add_argument("--target", required=True, help="the target mesh file (its format is reproduced)")
-    parser.add_argument("--mesh", required=True, help="repaired mesh file to write (same format as --target)")
     parser.add_argument("--out", required=True, help="verify.h5 to write")
     parser.add_argument("--fallback-eps", type=float, default=100.0,
-                        help="a constrained vertex farther than this many eps from its target triggers the fallback")
-    parser.add_argument("--ring", type=int, default=1, help="rings grown around fallback triggers")
+                        help="vertices farther than this many eps from their targets have not reached them")
+    parser.add_argument("--ring", type=int, default=1, help="rings grown around fallback triggers (first attempt)")
+    parser.add_argument("--max-rings", type=int, default=6, help="most rings tried around new intersections")
     parser.add_argument("--no-repair-new", dest="repair_new", action="store_false",
                         help="do not replace regions with new intersections by the target")
+    parser.add_argument("--no-reproduce", dest="reproduce", action="store_false",
+                        help="keep the integrated positions of the constrained vertices (no snap to the target)")
     return parser
 
 
@@ -56,44 +62,61 @@ def main(args, log):
         cl, _ = read_artifact(args.classify, "classify", ["mask", "pairs", "pair_offsets"])
         it, _ = read_artifact(args.integrate, "integrate", ["positions"])
         _, fattrs = read_artifact(args.fit, "fit", [])
-        V_file, F_file = read_mesh(args.target)
     V_ref, V_tgt, F = kf["reference"], kf["target"], kf["faces"]
-    if not (np.array_equal(F_file, F) and np.array_equal(V_file, V_tgt)):
-        raise InputError(args.target, "is not the target these artifacts were computed from")
     d = float(fattrs["metrics"]["bbox_diagonal"])
     eps = json.loads(fattrs["config"])["eps_rel"] * d
     m, mask = len(F), cl["mask"]
-    offsets, pairs = cl["pair_offsets"], cl["pairs"]
-    reference_faces = intersecting_faces(pairs[offsets[0]:offsets[1]], m)
-    target_faces = intersecting_faces(pairs[offsets[-2]:offsets[-1]], m)
-    keyframes_max = max(intersecting_faces(pairs[offsets[k]:offsets[k + 1]], m).sum() for k in range(len(offsets) - 1))
+    offsets = cl["pair_offsets"]
+    frame_pairs = [cl["pairs"][offsets[k]:offsets[k + 1]] for k in range(len(offsets) - 1)]
+    reference_faces = intersecting_faces(frame_pairs[0], m)
+    target_faces = intersecting_faces(frame_pairs[-1], m)
+    keyframes_max = max(intersecting_faces(p, m).sum() for p in frame_pairs)
+    threshold = args.fallback_eps * eps
+    integrated_dev, integrated = deviation(it["positions"], V_tgt, mask, d)
     with timings.step("fallback", log):
-        X, replaced, new = fallback(it["positions"], V_tgt, F, mask, reference_faces, args.fallback_eps * eps,
-                                    args.ring, args.repair_new, log)
+        X, replaced, _ = fallback(it["positions"], V_ref, V_tgt, F, mask, frame_pairs, threshold,
+                                  args.ring, args.max_rings, args.repair_new, log)
+    with timings.step("reproduce", log):
+        if args.reproduce:
+            reached = np.linalg.norm(X - V_tgt, axis=1) <= threshold
+            keep = mask & reached & (replaced == 0)
+            X, moved = reproduce_targets(X, V_tgt, F, vertex_adjacency(F, len(X)), keep, replaced > 0,
+                                         reference_faces, log=log)
+            replaced[moved] |= REPRODUCED
     with timings.step("verify", log):
         repaired_pairs = self_intersecting_pairs(X, F)
         repaired_faces = intersecting_faces(repaired_pairs, m)
+        new = repaired_faces & ~reference_faces
         dev, summary = deviation(X, V_tgt, mask, d)
-    log.info("intersecting faces: reference %d, target %d, repaired %d (new %d); %d vertices from the target",
-             reference_faces.sum(), target_faces.sum(), repaired_faces.sum(), new.sum(), np.count_nonzero(replaced))
-    log.info("deviation / d: constrained mean %.2e max %.2e, free mean %.2e max %.2e", summary["constrained_mean"],
-             summary["constrained_max"], summary["free_mean"], summary["free_max"])
-    with timings.step("write", log):
-        write_like(args.mesh, X, F, args.target)
+    metrics = {"vertices": len(X), "faces": m, "intersecting_faces_reference": int(reference_faces.sum()),
+               "intersecting_faces_target": int(target_faces.sum()),
+               "intersecting_faces_repaired": int(repaired_faces.sum()), "repaired_new": int(new.sum()),
+               "intersecting_faces_keyframes_max": int(keyframes_max), **_fallback_counts(replaced, new, F),
+               **{f"deviation_{k}": v for k, v in summary.items()},
+               **{f"integrated_deviation_{k}": v for k, v in integrated.items()}}
+    log.info("intersecting faces: reference %d, target %d, repaired %d (new %d); %d vertices changed by the fallback",
+             reference_faces.sum(), target_faces.sum(), repaired_faces.sum(), new.sum(), metrics["fallback_vertices"])
+    log.info("deviation / d: constrained mean %.2e max %.2e, free mean %.2e max %.2e (integrated: %.2e, %.2e)",
+             summary["constrained_mean"], summary["constrained_max"], summary["free_mean"], summary["free_max"],
+             integrated["constrained_mean"], integrated["constrained_max"])
     write_artifact(
         args.out, "verify",
-        {"repaired": X, "deviation": dev, "replaced": replaced, "new_faces": new, "pairs": repaired_pairs},
-        params={"fallback_eps": args.fallback_eps, "ring": args.ring, "repair_new": args.repair_new},
-        inputs=[args.keyframes, args.classify, args.integrate, args.fit, args.target], timings=timings,
-        metrics={"vertices": len(X), "faces": m, "intersecting_faces_reference": int(reference_faces.sum()),
-                 "intersecting_faces_target": int(target_faces.sum()),
-                 "intersecting_faces_repaired": int(repaired_faces.sum()), "repaired_new": int(new.sum()),
-                 "intersecting_faces_keyframes_max": int(keyframes_max),
-                 "fallback_vertices": int(np.count_nonzero(replaced)),
-                 "fallback_far": int(np.count_nonzero(replaced & REPLACED_FAR)),
-                 "fallback_new_intersection": int(np.count_nonzero(replaced & REPLACED_NEW_INTERSECTION)),
-                 "mesh": str(args.mesh), **{f"deviation_{k}": v for k, v in summary.items()}},
+        {"integrated_deviation": integrated_dev, "repaired": X, "deviation": dev, "replaced": replaced,
+         "new_faces": new, "pairs": repaired_pairs},
+        params={"fallback_eps": args.fallback_eps, "ring": args.ring, "max_rings": args.max_rings,
+                "repair_new": args.repair_new, "reproduce": args.reproduce},
+        inputs=[args.keyframes, args.classify, args.integrate, args.fit], timings=timings, metrics=metrics,
         docs=DOCS)
+
+
+def _fallback_counts(replaced, new, F):
+    """Vertex counts per fallback kind and the new faces inside pass-through regions (metrics)."""
+    pass_through = (replaced & REPLACED_PASS_THROUGH) > 0
+    return {"fallback_vertices": int(np.count_nonzero(replaced & ~np.uint8(REPRODUCED))),
+            "fallback_pass_through": int(np.count_nonzero(pass_through)),
+            "fallback_new_intersection": int(np.count_nonzero(replaced & ~np.uint8(REPLACED_PASS_THROUGH | REPRODUCED))),
+            "reproduced_vertices": int(np.count_nonzero(replaced & REPRODUCED)),
+            "repaired_new_in_fallback": int(new[pass_through[F].any(axis=1)].sum())}
 
 
 if __name__ == "__main__":

@@ -40,7 +40,7 @@ def test_demo_run_produces_every_artifact(demo_run):
     results = demo_run / "results" / "demo"
     assert (results / "library.h5").exists()
     for pose in POSES:
-        for stage in ("keyframes", "classify", "constraints", "fit"):
+        for stage in ("keyframes", "classify", "constraints", "fit", "integrate", "verify"):
             assert (results / pose.name / f"{stage}.h5").exists()
             assert (results / "benchmarks" / pose.name / f"{stage}.tsv").exists()
             assert (results / "logs" / pose.name / f"{stage}.log").read_text().strip()
@@ -53,12 +53,31 @@ def test_demo_run_produces_every_artifact(demo_run):
             assert fh["metrics"].attrs["centers"] <= 4000
 
 
+def test_demo_poses_are_repaired(demo_run):
+    """S0's promise on the demo library: no new intersection, untouched regions reproduced."""
+    import json
+    from posefix.io import read_mesh
+    summary = json.loads((demo_run / "reports" / "demo" / "summary.json").read_text())
+    assert [e["pose"] for e in summary["poses"]] == [p.name for p in POSES]
+    for e in summary["poses"]:
+        assert e["intersecting_faces"]["target"] > 0 and e["intersecting_faces"]["repaired_new"] == 0
+        assert e["deviation"]["constrained_mean"] <= 1e-3 and e["deviation"]["constrained_max"] <= 5e-3
+        assert e["integrated_deviation"]["constrained_mean"] <= 1e-3  # before the snap to the target
+        assert e["integrate"]["steps_max"] > 0 and e["seconds_total"] > 0
+    lib = demo_run / "data" / "demo"
+    for pose in POSES:
+        V_tgt, F = read_mesh(lib / f"{pose.name}{pose.suffix}")
+        V, F2 = read_mesh(demo_run / "results" / "demo" / "repaired" / f"{pose.name}{pose.suffix}")
+        assert np.array_equal(F, F2) and V.shape == V_tgt.shape
+    assert (demo_run / "reports" / "demo" / "summary.md").read_text().count("| demo-") == len(POSES)
+
+
 def test_rerun_is_a_no_op_and_outputs_are_deterministic(demo_run, tmp_path):
     proc = snakemake(demo_run, "-n")
     assert "Nothing to be done" in proc.stdout + proc.stderr
     proc = snakemake(tmp_path, "--config", "poses=demo-02")
     assert proc.returncode == 0, proc.stderr[-3000:]
-    for stage in ("keyframes", "classify", "constraints", "fit"):
+    for stage in ("keyframes", "classify", "constraints", "fit", "integrate", "verify"):
         a = _datasets(demo_run / "results" / "demo" / "demo-02" / f"{stage}.h5")
         b = _datasets(tmp_path / "results" / "demo" / "demo-02" / f"{stage}.h5")
         assert a.keys() == b.keys()
@@ -110,6 +129,25 @@ def test_lion_library(tmp_path):
             assert counts[0] == 138 and counts[-1] == target_counts.get(pose, counts[-1])
             assert max(counts[1:-1]) <= max(counts[0], counts[-1])  # no tearing in the key frames
             assert fh["mask"][()].sum() > 0.5 * len(fh["mask"])
+    _check_repaired_library(tmp_path, lib, "lion-poses")
+
+
+def _check_repaired_library(work, lib, name):
+    """Repaired files keep the input's faces; fewer intersections than the target; the deviation of
+    V_C in the repaired pose stays within S0's reproduction bar on average."""
+    import json
+    from posefix.io import read_mesh
+    summary = json.loads((work / "reports" / name / "summary.json").read_text())
+    for e in summary["poses"]:
+        source = next(lib.glob(f"{e['pose']}.*"))
+        V_tgt, F = read_mesh(source)
+        V, F2 = read_mesh(work / "results" / name / "repaired" / source.name)
+        assert np.array_equal(F, F2) and V.shape == V_tgt.shape
+        i = e["intersecting_faces"]
+        assert i["repaired"] < i["target"] or i["repaired"] <= i["reference"], e["pose"]
+        assert e["deviation"]["constrained_mean"] <= 1e-3, e["pose"]
+        if e["fallback"]["pass_through"] == 0:  # without a pass-through region: at most a few faces
+            assert i["repaired_new"] <= 0.05 * i["target"], e["pose"]
 
 
 def test_nested_config_overrides_reach_the_stages(tmp_path):

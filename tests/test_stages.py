@@ -12,7 +12,8 @@ from conftest import ROOT, run_stage
 from posefix import __version__
 from posefix.h5io import config_hash, inputs_hash
 
-STAGES = ["demo", "validate", "keyframes", "classify", "constraints", "fit"]
+STAGES = ["demo", "validate", "keyframes", "classify", "constraints", "fit", "integrate", "verify", "export",
+          "summary"]
 
 
 def documented_datasets():
@@ -47,7 +48,7 @@ def test_help(stage):
 
 @pytest.fixture(scope="module")
 def demo_artifacts(tmp_path_factory):
-    """validate, keyframes and classify run by hand on demo-01 (K = 5)."""
+    """Every per-pose stage run by hand on demo-01 (K = 5, a small fit)."""
     tmp = tmp_path_factory.mktemp("stages")
     run_stage("demo", "--out", tmp / "lib")
     ref, tgt = tmp / "lib" / "demo-reference.obj", tmp / "lib" / "demo-01.obj"
@@ -59,10 +60,14 @@ def demo_artifacts(tmp_path_factory):
               "--samples", 4, "--out", tmp / "constraints.h5")
     run_stage("fit", "--constraints", tmp / "constraints.h5", "--max-centers", 400, "--batch", 64,
               "--out", tmp / "fit.h5")
+    run_stage("integrate", "--fit", tmp / "fit.h5", "--constraints", tmp / "constraints.h5",
+              "--keyframes", tmp / "keyframes.h5", "--out", tmp / "integrate.h5")
+    run_stage("verify", "--keyframes", tmp / "keyframes.h5", "--classify", tmp / "classify.h5",
+              "--integrate", tmp / "integrate.h5", "--fit", tmp / "fit.h5", "--out", tmp / "verify.h5")
     return tmp
 
 
-@pytest.mark.parametrize("stage", ["validate", "keyframes", "classify", "constraints", "fit"])
+@pytest.mark.parametrize("stage", ["validate", "keyframes", "classify", "constraints", "fit", "integrate", "verify"])
 def test_artifact_attributes_and_documentation(demo_artifacts, stage):
     path = demo_artifacts / ("library.h5" if stage == "validate" else f"{stage}.h5")
     docs = documented_datasets()[stage]
@@ -128,3 +133,26 @@ def test_classify_rejects_a_wrong_artifact(demo_artifacts, tmp_path):
     Path(tmp_path / "junk.h5").write_text("not hdf5")
     proc = run_stage("classify", "--keyframes", tmp_path / "junk.h5", "--out", tmp_path / "c.h5", check=False)
     assert proc.returncode == 2 and "cannot be read as HDF5" in proc.stderr
+
+
+def test_export_reproduces_the_target_file_but_the_vertex_lines(demo_artifacts, tmp_path):
+    target = demo_artifacts / "lib" / "demo-01.obj"
+    run_stage("export", "--verify", demo_artifacts / "verify.h5", "--target", target, "--out", tmp_path / "r.obj")
+    with h5py.File(demo_artifacts / "verify.h5", "r") as fh:
+        X = fh["repaired"][()]
+    ours, theirs = (tmp_path / "r.obj").read_text().splitlines(), target.read_text().splitlines()
+    assert len(ours) == len(theirs)
+    assert [a for a in ours if not a.startswith("v ")] == [b for b in theirs if not b.startswith("v ")]
+    V = np.array([[float(x) for x in a.split()[1:4]] for a in ours if a.startswith("v ")])
+    assert np.array_equal(V, X)  # round trip without loss
+
+
+def test_export_refuses_a_target_of_another_size(demo_artifacts, tmp_path):
+    from conftest import icosphere
+    from posefix.io import write_mesh
+    V, F = icosphere(1)
+    write_mesh(tmp_path / "ball.obj", V, F)
+    proc = run_stage("export", "--verify", demo_artifacts / "verify.h5", "--target", tmp_path / "ball.obj",
+                     "--out", tmp_path / "r.obj", check=False)
+    assert proc.returncode == 2 and "ball.obj" in proc.stderr and "Traceback" not in proc.stderr
+    assert not (tmp_path / "r.obj").exists()

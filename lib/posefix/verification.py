@@ -3,30 +3,49 @@
 *New* intersecting faces are faces that intersect in the repaired pose but not in the reference
 (the reference's own intersections are reproduced by design, S0 §4.3).
 
-Fallback (S0 §6, Fig. 9, extended): a region of the repaired pose is replaced by the target's
-positions when
+Two fallbacks replace regions of the repaired pose by the target's positions:
 
-* **far**: vertices of ``V_C`` end farther than a threshold from their targets — the symptom of key
-  frames passing through each other, which a flow cannot reproduce (S0 Fig. 9); or
-* **new intersection**: faces intersect that intersect neither in the reference nor, locally, in the
-  target — discretization (straight triangles between exactly moved vertices) and fitting error
-  can push two nearby surfaces into each other although the continuous flow keeps them apart.
+* **pass-through** (S0 §6, Fig. 9): where key frames pass through each other, a flow cannot
+  follow: it keeps the parts on their sides, and vertices end far (``threshold``) from their
+  targets (see :func:`_pass_through_regions` for the two triggers). Such regions, with the
+  unconstrained parts they touch, are replaced by the target when that adds no intersecting face
+  the target does not have there (no seam between copied and integrated parts). The target's own
+  intersections in the copied region come back with it, as in S0; they are reported separately.
+* **new intersection**: faces that still intersect in the repaired pose but not in the reference.
+  Exactly moved vertices joined by straight triangles, and the fit's residual error, can push two
+  nearby surfaces into each other although the continuous flow keeps them apart (thin folds and
+  near contacts, or the rim of an intersection the reference already has). Both sides of every
+  such pair, grown by ``ring`` (then ``ring + 1``, ...) rings, get the first of these that removes
+  new faces and adds none: the target's positions; their unconstrained vertices smoothed (a few
+  Jacobi steps of the uniform Laplacian, boundary fixed); the reference's shape of the region moved
+  rigidly onto it (least squares), which restores the reference's own intersection pattern.
 
-Each trigger set is grown by ``ring`` rings and split into connected components; a component is
-replaced only if that adds no new intersecting face (and, for the second trigger, removes some).
+Finally :func:`reproduce_targets` puts the untouched constrained vertices exactly on their targets
+(the fit reproduces them only up to its error, S0 §6 "Target shape reproduction") and blends the
+residual harmonically into the rest, except where that would add intersecting faces.
 """
 
 import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
+from posefix.classification import new_pairs
+from posefix.harmonic import harmonic_extension
 from posefix.intersections import intersecting_faces, self_intersecting_pairs
+from posefix.rotations import kabsch
 from posefix.topology import grow_rings, vertex_adjacency
 
-REPLACED_FAR = 1
-"""Replaced by the target: a constrained vertex ended far from its target (global intersection)."""
+REPLACED_PASS_THROUGH = 1
+"""Replaced by the target: key frames pass through each other there and integration did not reach the target."""
 REPLACED_NEW_INTERSECTION = 2
 """Replaced by the target: the region had new intersecting faces that the target does not have."""
+SMOOTHED = 4
+"""Unconstrained vertex smoothed to untangle new intersecting faces."""
+RIGID_REFERENCE = 8
+"""Region replaced by the reference's shape moved rigidly onto it, to untangle new intersecting faces."""
+REPRODUCED = 16
+"""Moved onto the target (constrained) or by the harmonic blend of the constrained residual (free)."""
+SMOOTHING_STEPS = (5, 20, 50)
 
 
 def deviation(X, V_tgt, mask, d):
@@ -48,65 +67,273 @@ def deviation(X, V_tgt, mask, d):
     return dev, summary
 
 
-def fallback(X, V_tgt, F, mask, reference_faces, threshold, ring=1, repair_new=True, log=None):
+def transient_pairs(frame_pairs):
+    """Face pairs that intersect in some intermediate key frame but not in the first or last one.
+
+    Parameters
+    ----------
+    frame_pairs : list of (k_i, 2) int
+        Intersecting pairs per key frame (sorted rows ``f < g``).
+
+    Returns
+    -------
+    (p, 2) int64
+    """
+    ends = np.concatenate([frame_pairs[0], frame_pairs[-1]]).reshape(-1, 2)
+    middle = np.concatenate([np.zeros((0, 2), dtype=np.int64)] + list(frame_pairs[1:-1])).reshape(-1, 2)
+    return np.unique(new_pairs(middle, ends), axis=0)
+
+
+class _State:
+    """Repaired positions with their intersecting pairs, new faces and fallback flags."""
+
+    def __init__(self, X, F, reference_faces):
+        self.X, self.F, self.reference_faces = X.copy(), F, reference_faces
+        self.pairs = self_intersecting_pairs(self.X, F)
+        self.new = intersecting_faces(self.pairs, len(F)) & ~reference_faces
+        self.replaced = np.zeros(len(X), dtype=np.uint8)
+
+    def copy(self):
+        other = object.__new__(_State)
+        other.__dict__.update(self.__dict__)
+        other.replaced = self.replaced.copy()
+        return other
+
+    def trial(self, region, positions):
+        """Positions, pairs and new faces with ``region`` moved to ``positions[region]``."""
+        X = self.X.copy()
+        X[region] = positions[region]
+        pairs = self_intersecting_pairs(X, self.F)
+        return X, pairs, intersecting_faces(pairs, len(self.F)) & ~self.reference_faces
+
+    def improves(self, trial):
+        """Whether a trial removes new faces and adds none."""
+        return not (trial[2] & ~self.new).any() and trial[2].sum() < self.new.sum()
+
+    def accept(self, trial, region, flag):
+        self.X, self.pairs, self.new = trial
+        self.replaced[region] |= flag
+
+
+def fallback(X, V_ref, V_tgt, F, mask, frame_pairs, threshold, ring=1, max_rings=3, repair_new=True, log=None):
     """Replace regions of the repaired pose by the target where integration could not do its job.
 
     Parameters
     ----------
     X : (n, 3) float
         Integrated positions.
-    V_tgt : (n, 3) float
-        Target positions.
+    V_ref, V_tgt : (n, 3) float
+        Reference and target positions.
     F : (m, 3) int
     mask : (n,) bool
         ``V_C``.
-    reference_faces : (m,) bool
-        Faces intersecting in the reference.
+    frame_pairs : list of (k_i, 2) int
+        Intersecting face pairs per key frame (frame 0 the reference, the last the target).
     threshold : float
-        Distance (length units) beyond which a constrained vertex counts as far from its target.
+        Distance (length units) beyond which a vertex counts as not having reached its target.
     ring : int
-        Rings grown around the trigger vertices.
+        Rings grown around the trigger vertices (first attempt).
+    max_rings : int
+        Largest number of rings tried around new intersections.
     repair_new : bool
-        Also try the second trigger (new intersections).
+        Try the new-intersection fallback.
 
     Returns
     -------
     X : (n, 3) float
         Positions after the replacements.
     replaced : (n,) uint8
-        ``REPLACED_*`` flags per vertex.
+        ``REPLACED_*``, ``SMOOTHED`` and ``RIGID_REFERENCE`` flags per vertex.
     new : (m,) bool
         New intersecting faces that remain.
     """
-    n = len(X)
-    X = X.copy()
+    n, m = len(X), len(F)
     A = vertex_adjacency(F, n)
-    replaced = np.zeros(n, dtype=np.uint8)
-    pairs = self_intersecting_pairs(X, F)
-    new = intersecting_faces(pairs, len(F)) & ~reference_faces
-    for flag in (REPLACED_FAR, REPLACED_NEW_INTERSECTION) if repair_new else (REPLACED_FAR,):
-        seeds = np.zeros(n, dtype=bool)
-        links = np.zeros((0, 2), dtype=np.int64)
-        if flag == REPLACED_FAR:
-            seeds = np.linalg.norm(X - V_tgt, axis=1) > threshold
-        else:  # both faces of every pair with a new face, joined: the two sides are replaced together
-            culprit = pairs[new[pairs[:, 0]] | new[pairs[:, 1]]]
-            seeds[F[culprit].ravel()] = True
-            links = np.stack([F[culprit[:, 0], 0], F[culprit[:, 1], 0]], axis=1)
-        for component in _components(grow_rings(seeds, A, ring), A, links):
-            trial = X.copy()
-            trial[component] = V_tgt[component]
-            trial_pairs = self_intersecting_pairs(trial, F)
-            trial_new = intersecting_faces(trial_pairs, len(F)) & ~reference_faces
-            ok = not (trial_new & ~new).any() and (flag == REPLACED_FAR or trial_new.sum() < new.sum())
-            if log is not None:
-                log.info("fallback (%s) region of %d vertices: %s (new faces %d -> %d)",
-                         "far from target" if flag == REPLACED_FAR else "new intersection", len(component),
-                         "replaced by the target" if ok else "kept", new.sum(), trial_new.sum())
+    target_faces = intersecting_faces(frame_pairs[-1], m)
+    state = _State(X, F, intersecting_faces(frame_pairs[0], m))
+
+    def cleanup(state):
+        for rings in range(ring, max_rings + 1) if repair_new else ():
+            if not _untangle(state, V_ref, V_tgt, A, mask, rings, log):
+                break
+
+    far = np.linalg.norm(X - V_tgt, axis=1) > threshold
+    for region in _pass_through_regions(F, mask, A, far, ring, frame_pairs):
+        trial = state.copy()
+        trial.accept(trial.trial(region, V_tgt), region, REPLACED_PASS_THROUGH)
+        cleanup(trial)
+        seams = trial.new & ~target_faces & ~state.new  # intersections neither before nor in the target
+        _log(log, "pass-through, target", region, state, (None, None, trial.new), not seams.any())
+        if not seams.any():
+            state = trial
+    cleanup(state)
+    return state.X, state.replaced, state.new
+
+
+def _untangle(state, V_ref, V_tgt, A, mask, rings, log):
+    """One round of the new-intersection remedies on regions of ``rings`` rings; False if none is left."""
+    culprit = state.pairs[state.new[state.pairs].any(axis=1)]
+    if len(culprit) == 0:
+        return False
+    F = state.F
+    seeds = np.zeros(len(state.X), dtype=bool)
+    seeds[F[culprit].ravel()] = True
+    links = np.stack([F[culprit[:, 0], 0], F[culprit[:, 1], 0]], axis=1)
+    for region in _components(grow_rings(seeds, A, rings), A, links):
+        for flag, moved, positions in _remedies(state.X, V_tgt, V_ref, A, mask, region):
+            trial = state.trial(moved, positions)
+            ok = state.improves(trial)
+            _log(log, f"new intersection, {rings} rings, {_REMEDY_NAMES[flag]}", moved, state, trial, ok)
             if ok:
-                X, pairs, new = trial, trial_pairs, trial_new
-                replaced[component] |= flag
-    return X, replaced, new
+                state.accept(trial, moved, flag)
+                break
+    return True
+
+
+_REMEDY_NAMES = {REPLACED_NEW_INTERSECTION: "target", SMOOTHED: "smoothing", RIGID_REFERENCE: "rigid reference"}
+
+
+def _remedies(X, V_tgt, V_ref, A, mask, region):
+    """Candidate fixes of a region, in order: (flag, vertices moved, positions to take them from).
+
+    The last one copies from the target the whole unconstrained parts the region lies in (a
+    long unconstrained part such as a tail tip can be crumpled beyond any ring of the culprits).
+    """
+    yield REPLACED_NEW_INTERSECTION, region, V_tgt
+    free = region[~mask[region]]
+    for steps in SMOOTHING_STEPS if len(free) else ():
+        yield SMOOTHED, free, smooth(X, A, free, steps)
+    R, c_ref, c_x = kabsch(V_ref[region], X[region], np.ones(len(region)))
+    carried = X.copy()
+    carried[region] = (V_ref[region] - c_ref) @ R.T + c_x
+    yield RIGID_REFERENCE, region, carried
+    if len(free):
+        parts = np.zeros(len(mask), dtype=bool)
+        for component in _components(~mask, A):
+            if np.isin(component, free).any():
+                parts[component] = True
+        parts[region] = True
+        yield REPLACED_NEW_INTERSECTION, np.flatnonzero(grow_rings(parts, A, 1)), V_tgt
+
+
+def reproduce_targets(X, V_tgt, F, A, keep, hold, reference_faces, rings=2, attempts=8, log=None):
+    """Move ``keep`` vertices onto their targets and blend the residual harmonically into the rest.
+
+    The correction ``V_tgt - X`` on ``keep`` is extended to the other vertices by the uniform
+    Laplacian (:func:`posefix.harmonic.harmonic_extension`), with zero correction on ``hold``.
+    Where the corrected pose has intersecting faces that ``X`` does not (outside
+    ``reference_faces``), both faces of every such pair, grown by ``rings`` rings, are held too and
+    the blend is recomputed, at most ``attempts`` times; then ``X`` is returned unchanged.
+
+    Parameters
+    ----------
+    X, V_tgt : (n, 3) float
+        Current and target positions.
+    F : (m, 3) int
+    A : (n, n) sparse bool
+        Vertex adjacency.
+    keep : (n,) bool
+        Vertices to put on their targets (constrained, reached their targets, not in a fallback).
+    hold : (n,) bool
+        Vertices that must not move (changed by the fallback).
+    reference_faces : (m,) bool
+        Faces intersecting in the reference (not counted as added).
+
+    Returns
+    -------
+    X : (n, 3) float
+    moved : (n,) bool
+        Vertices whose position changed.
+    """
+    residual = V_tgt - X
+    held = hold.copy()
+    before = intersecting_faces(self_intersecting_pairs(X, F), len(F)) & ~reference_faces
+    for attempt in range(attempts):
+        on_target = keep & ~held
+        Y = X + harmonic_extension(A, np.where(on_target[:, None], residual, 0.0), keep | held)
+        Y[on_target] = V_tgt[on_target]  # bitwise, not up to rounding
+        pairs = self_intersecting_pairs(Y, F)
+        added = intersecting_faces(pairs, len(F)) & ~reference_faces & ~before
+        if not added.any():
+            _log_info(log, "reproduction: %d constrained vertices put on their targets, %d held back",
+                      np.count_nonzero(on_target), np.count_nonzero(keep & held))
+            return Y, (Y != X).any(axis=1)
+        seeds = np.zeros(len(X), dtype=bool)
+        seeds[F[pairs[added[pairs].any(axis=1)]].ravel()] = True
+        held |= grow_rings(seeds, A, rings)
+        _log_info(log, "reproduction attempt %d adds %d intersecting faces: %d vertices held back",
+                  attempt + 1, added.sum(), np.count_nonzero(held))
+    _log_info(log, "reproduction abandoned after %d attempts", attempts)
+    return X.copy(), np.zeros(len(X), dtype=bool)
+
+
+def smooth(X, A, region, steps):
+    """Jacobi steps ``x <- (x + mean of neighbours) / 2`` on ``region`` only, (n, 3) float."""
+    rows = A[region].astype(np.float64)
+    deg = np.asarray(rows.sum(axis=1)).ravel()
+    Y = X.copy()
+    for _ in range(steps):
+        Y[region] = 0.5 * Y[region] + 0.5 * (rows @ Y) / deg[:, None]
+    return Y
+
+
+def _pass_through_regions(F, mask, A, far, ring, frame_pairs):
+    """Regions where integration did not reach the target, as connected components.
+
+    Two kinds of seeds:
+
+    * constrained vertices ending ``far`` from their targets, grown by ``ring`` rings;
+    * unconstrained parts with a pair of faces that intersect only in intermediate key frames
+      (:func:`transient_pairs`), some vertex ending far from its target, and no face intersecting
+      in the target: key frames pass through each other where the target is clean (S0 Fig. 9),
+      and the flow left the part behind.
+
+    The unconstrained components the seeds touch are added (the parts that were carried along),
+    and the region is closed under the target's intersecting pairs (a part the copied target
+    region intersects in the target is copied too, so that no seam appears between them).
+    """
+    target_pairs = frame_pairs[-1]
+    target_faces = intersecting_faces(target_pairs, len(F))
+    free = _components(~mask, A)
+    seeds = grow_rings(mask & far, A, ring)
+    transient = transient_pairs(frame_pairs)
+    in_transient = np.zeros(len(mask), dtype=bool)
+    in_transient[F[transient].ravel()] = True
+    for component in free:
+        inside = np.zeros(len(mask), dtype=bool)
+        inside[component] = True
+        clean = not target_faces[inside[F].any(axis=1)].any()
+        if clean and in_transient[component].any() and far[component].any():
+            seeds[component] = True
+    if not seeds.any():
+        return []
+    label = np.full(len(mask), -1)
+    for c, component in enumerate(free):
+        label[component] = c
+    region = seeds.copy()
+    while True:
+        touched = np.unique(label[grow_rings(region, A, 1) & ~mask])
+        partners = target_pairs[region[F[target_pairs]].any(axis=2).any(axis=1)]
+        touched = np.union1d(touched, np.unique(label[F[partners].ravel()]))
+        grown = region.copy()
+        for c in touched[touched >= 0]:
+            grown[free[c]] = True
+        grown[F[partners].ravel()] = True
+        if (grown == region).all():
+            break
+        region = grown
+    return _components(region, A, np.stack([F[target_pairs[:, 0], 0], F[target_pairs[:, 1], 0]], axis=1))
+
+
+def _log_info(log, *args):
+    if log is not None:
+        log.info(*args)
+
+
+def _log(log, kind, region, state, trial, ok):
+    if log is not None:
+        log.info("fallback (%s) on %d vertices: %s (new faces %d -> %d)", kind, len(region),
+                 "applied" if ok else "rejected", state.new.sum(), trial[2].sum())
 
 
 def _components(selected, A, links=None):

@@ -1,0 +1,30 @@
+"""Harmonic extension on a mesh graph: exact on linear data of a regular grid, zero without data."""
+
+import numpy as np
+
+from posefix.harmonic import harmonic_extension
+from posefix.topology import vertex_adjacency
+from test_verification import _grid
+
+
+def test_linear_function_is_reproduced_inside_a_regular_grid():
+    # every interior vertex of this triangulation has neighbours symmetric about it,
+    # so a linear function is discrete-harmonic for the uniform Laplacian
+    V, F = _grid(9, 0.0)
+    A = vertex_adjacency(F, len(V))
+    values = np.column_stack([2 * V[:, 0] - V[:, 1] + 0.5, V[:, 1]])
+    boundary = (V[:, :2] == 0).any(axis=1) | (V[:, :2] == 1).any(axis=1)
+    out = harmonic_extension(A, np.where(boundary[:, None], values, 99.0), boundary)
+    assert np.allclose(out, values, atol=1e-12)
+
+
+def test_unanchored_components_get_zero_and_known_values_are_kept():
+    V1, F1 = _grid(5, 0.0)
+    F = np.vstack([F1, F1 + len(V1)])  # two separate sheets
+    A = vertex_adjacency(F, 2 * len(V1))
+    known = np.zeros(2 * len(V1), dtype=bool)
+    known[:3] = True
+    values = np.ones((2 * len(V1), 3))
+    out = harmonic_extension(A, values, known)
+    assert np.allclose(out[:len(V1)], 1.0)  # constant data: constant extension
+    assert not out[len(V1):].any()  # the second sheet touches no known vertex
