@@ -1,7 +1,9 @@
 # posefix: repair self-intersections in a pose library by space-time integration (S0).
 # Data flow, one pose at a time after the library is validated:
 #   demo (only without --config library=...) -> validate -> keyframes -> classify -> constraints
-#   -> fit -> integrate -> verify -> export (the repaired mesh); then summary over all poses
+#   -> fit -> integrate -> verify -> export (the repaired mesh) and render (report figures);
+#   then summary and overview over all poses. `snakemake --report reports/<library>/report.html`
+#   collects the report() outputs (captions in rules/captions/).
 # Rules only wire stage scripts (stages/<rule>.py); the math is in lib/posefix/.
 from snakemake.utils import min_version
 
@@ -14,6 +16,9 @@ configfile: os.path.join(workflow.basedir, "config.yaml")
 include: "rules/common.smk"
 
 
+report: "rules/captions/workflow.rst"
+
+
 wildcard_constraints:
     pose="|".join(re.escape(p) for p in POSES),
 
@@ -21,12 +26,15 @@ wildcard_constraints:
 localrules:
     all,
     summary,
+    overview,
 
 
 rule all:
     input:
         [repaired_file(p) for p in POSES],
+        expand(f"{REPORTS}/figures/{{pose}}/{{figure}}.png", pose=POSES, figure=FIGURES),
         f"{REPORTS}/summary.json",
+        f"{REPORTS}/overview.png",
 
 
 rule demo:
@@ -202,6 +210,7 @@ rule verify:
         f"{RESULTS}/{{pose}}/verify.h5",
     params:
         fallback=config["verify"]["fallback_eps"],
+        fallback_fit=config["verify"]["fallback_fit"],
         ring=config["verify"]["ring"],
         rings=config["verify"]["max_rings"],
         switches=" ".join(
@@ -220,6 +229,7 @@ rule verify:
     shell:
         "{params.python:q} {params.script:q} --keyframes {input.keyframes:q} --classify {input.classify:q}"
         " --integrate {input.integrate:q} --fit {input.fit:q} --fallback-eps {params.fallback}"
+        " --fallback-fit {params.fallback_fit}"
         " --ring {params.ring} --max-rings {params.rings} {params.switches}"
         " --threads {threads} --out {output:q} --log {log:q}"
 
@@ -263,3 +273,55 @@ rule summary:
     shell:
         "{params.python:q} {params.script:q} --results {params.results:q} --poses {params.poses:q}"
         " --out {output.json:q} --markdown {output.md:q} --log {log:q}"
+
+
+rule render:
+    input:
+        keyframes=rules.keyframes.output[0],
+        classify=rules.classify.output[0],
+        fit=rules.fit.output[0],
+        verify=rules.verify.output[0],
+        benchmarks=[f"{RESULTS}/benchmarks/{{pose}}/{stage}.tsv" for stage in TIMED_STAGES],
+    output:
+        [pose_figure(figure) for figure in FIGURES],
+    params:
+        folder=lambda wildcards, output: os.path.dirname(output[0]),
+        benchmarks=lambda wildcards, input: os.path.dirname(input.benchmarks[0]),
+        python=PYTHON,
+        script=stage_script("render"),
+    threads: 1
+    log:
+        f"{RESULTS}/logs/{{pose}}/render.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/{{pose}}/render.tsv"
+    shell:
+        "{params.python:q} {params.script:q} --keyframes {input.keyframes:q} --classify {input.classify:q}"
+        " --fit {input.fit:q} --verify {input.verify:q} --benchmarks {params.benchmarks:q}"
+        " --pose {wildcards.pose:q} --out {params.folder:q} --log {log:q}"
+
+
+rule overview:
+    input:
+        rules.summary.output.json,
+    output:
+        png=report(
+            f"{REPORTS}/overview.png",
+            caption="rules/captions/overview.rst",
+            category="1. Library",
+            labels={"figure": "all poses at a glance"},
+        ),
+        html=report(
+            f"{REPORTS}/summary.html",
+            caption="rules/captions/summary.rst",
+            category="1. Library",
+            labels={"figure": "summary table"},
+        ),
+    params:
+        python=PYTHON,
+        script=stage_script("overview"),
+    threads: 1
+    log:
+        f"{RESULTS}/logs/overview.log",
+    shell:
+        "{params.python:q} {params.script:q} --summary {input:q} --png {output.png:q} --html {output.html:q}"
+        " --log {log:q}"

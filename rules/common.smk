@@ -121,3 +121,26 @@ def fit_options(wildcards):
 def repaired_file(pose):
     """Output path of the repaired mesh of a pose: results/<library>/repaired/<pose><input suffix>."""
     return f"{RESULTS}/repaired/{pose}{LIBRARY.pose(pose).suffix}"
+
+
+# Report figures of one pose (stage render), each with its caption in rules/captions/<figure>.rst.
+FIGURES = ("renders", "deviation", "classification", "fit", "timings")
+FIGURE_LABELS = {
+    "renders": "target vs repaired",
+    "deviation": "deviation heat map",
+    "classification": "intersections per key frame, V_C",
+    "fit": "fit history",
+    "timings": "stage timings",
+}
+TIMED_STAGES = ("keyframes", "classify", "constraints", "fit", "integrate", "verify")
+
+
+def pose_figure(figure):
+    """The report() output of one figure of stage render (wildcard {pose})."""
+    return report(
+        f"{REPORTS}/figures/{{pose}}/{figure}.png",
+        caption=f"rules/captions/{figure}.rst",
+        category="2. Poses",
+        subcategory="{pose}",
+        labels={"pose": "{pose}", "figure": FIGURE_LABELS[figure]},
+    )

@@ -10,14 +10,13 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "lib"))
 
-import csv  # noqa: E402
 import json  # noqa: E402
 
 import posefix  # noqa: E402,F401  (runtime defaults before numpy)
 
 from posefix.cli import run_stage, stage_parser  # noqa: E402
 from posefix.h5io import read_artifact  # noqa: E402
-from posefix.io import atomic_write_bytes  # noqa: E402
+from posefix.io import atomic_write_bytes, benchmark_seconds  # noqa: E402
 
 DEVIATIONS = ("constrained_max", "constrained_mean", "constrained_p95", "free_max", "free_mean", "free_p95")
 STAGES = ("keyframes", "classify", "constraints", "fit", "integrate", "verify", "export")
@@ -40,7 +39,7 @@ def pose_entry(results, pose):
     fi = read_artifact(folder / "fit.h5", "fit", [])[1]["metrics"]
     it = read_artifact(folder / "integrate.h5", "integrate", [])[1]["metrics"]
     ve = read_artifact(folder / "verify.h5", "verify", [])[1]["metrics"]
-    seconds = {stage: _benchmark_seconds(Path(results) / "benchmarks" / pose, stage) for stage in STAGES}
+    seconds = {stage: benchmark_seconds(Path(results) / "benchmarks" / pose, stage) for stage in STAGES}
     return {
         "pose": pose, "vertices": int(kf["vertices"]), "faces": int(kf["faces"]), "keyframes": int(kf["keyframes"]),
         "intersecting_faces": {
@@ -63,15 +62,6 @@ def pose_entry(results, pose):
         "seconds_stages": seconds,
         "seconds_total": sum(v for v in seconds.values() if v is not None),
     }
-
-
-def _benchmark_seconds(folder, stage):
-    """Wall seconds from a Snakemake benchmark file (``<stage>*.tsv``), None when absent."""
-    files = sorted(folder.glob(f"{stage}*.tsv"))
-    if not files:
-        return None
-    with open(files[0]) as fh:
-        return float(next(csv.DictReader(fh, delimiter="\t"))["s"])
 
 
 def markdown(library, entries):

@@ -17,6 +17,7 @@ import json  # noqa: E402
 import posefix  # noqa: E402,F401  (runtime defaults before numpy)
 import numpy as np  # noqa: E402
 
+from posefix.classification import split_frames  # noqa: E402
 from posefix.cli import Timings, run_stage, stage_parser  # noqa: E402
 from posefix.h5io import read_artifact, write_artifact  # noqa: E402
 from posefix.intersections import intersecting_faces, self_intersecting_pairs  # noqa: E402
@@ -46,6 +47,9 @@ def build_parser():
     parser.add_argument("--out", required=True, help="verify.h5 to write")
     parser.add_argument("--fallback-eps", type=float, default=100.0,
                         help="vertices farther than this many eps from their targets have not reached them")
+    parser.add_argument("--fallback-fit", type=float, default=2.0,
+                        help="constrained vertices within this many fit max errors (at least the threshold above) of their "
+                        "targets are put on them")
     parser.add_argument("--ring", type=int, default=1, help="rings grown around fallback triggers (first attempt)")
     parser.add_argument("--max-rings", type=int, default=6, help="most rings tried around new intersections")
     parser.add_argument("--no-repair-new", dest="repair_new", action="store_false",
@@ -66,23 +70,35 @@ def main(args, log):
     d = float(fattrs["metrics"]["bbox_diagonal"])
     eps = json.loads(fattrs["config"])["eps_rel"] * d
     m, mask = len(F), cl["mask"]
-    offsets = cl["pair_offsets"]
-    frame_pairs = [cl["pairs"][offsets[k]:offsets[k + 1]] for k in range(len(offsets) - 1)]
+    frame_pairs = split_frames(cl["pairs"], cl["pair_offsets"])
     reference_faces = intersecting_faces(frame_pairs[0], m)
     target_faces = intersecting_faces(frame_pairs[-1], m)
     keyframes_max = max(intersecting_faces(p, m).sum() for p in frame_pairs)
-    threshold = args.fallback_eps * eps
+    threshold = args.fallback_eps * eps  # farther: not reached (pass-through triggers)
+    reach = max(threshold, args.fallback_fit * float(fattrs["metrics"]["max_error_rel"]) * d)  # V_C: snap within
     integrated_dev, integrated = deviation(it["positions"], V_tgt, mask, d)
-    with timings.step("fallback", log):
-        X, replaced, _ = fallback(it["positions"], V_ref, V_tgt, F, mask, frame_pairs, threshold,
-                                  args.ring, args.max_rings, args.repair_new, log)
+    A = vertex_adjacency(F, len(V_ref))
+
+    def reproduce(X, replaced):
+        """Snap the constrained vertices within ``reach`` of their targets, outside fallback regions."""
+        if not args.reproduce:
+            return X, replaced
+        reached = np.linalg.norm(X - V_tgt, axis=1) <= reach
+        keep = mask & reached & (replaced == 0)
+        X, moved = reproduce_targets(X, V_tgt, F, A, keep, (replaced > 0) | (mask & ~reached), reference_faces,
+                                     log=log)
+        return X, replaced | np.where(moved, REPRODUCED, 0).astype(np.uint8)
+
+    # first, so that the fallback works on the corrected pose: constrained vertices that could not be
+    # snapped (that would add intersections) and stay beyond the threshold trigger the pass-through fallback
     with timings.step("reproduce", log):
-        if args.reproduce:
-            reached = np.linalg.norm(X - V_tgt, axis=1) <= threshold
-            keep = mask & reached & (replaced == 0)
-            X, moved = reproduce_targets(X, V_tgt, F, vertex_adjacency(F, len(X)), keep, replaced > 0,
-                                         reference_faces, log=log)
-            replaced[moved] |= REPRODUCED
+        X, reproduced = reproduce(it["positions"], np.zeros(len(V_ref), dtype=np.uint8))
+    with timings.step("fallback", log):
+        X, replaced, _ = fallback(X, V_ref, V_tgt, F, mask, frame_pairs, threshold,
+                                  args.ring, args.max_rings, args.repair_new, log)
+    with timings.step("reproduce", log):  # again: what the fallback untangled may now be snapped
+        X, replaced = reproduce(X, replaced)
+        replaced |= reproduced
     with timings.step("verify", log):
         repaired_pairs = self_intersecting_pairs(X, F)
         repaired_faces = intersecting_faces(repaired_pairs, m)
@@ -103,7 +119,7 @@ def main(args, log):
         args.out, "verify",
         {"integrated_deviation": integrated_dev, "repaired": X, "deviation": dev, "replaced": replaced,
          "new_faces": new, "pairs": repaired_pairs},
-        params={"fallback_eps": args.fallback_eps, "ring": args.ring, "max_rings": args.max_rings,
+        params={"fallback_eps": args.fallback_eps, "fallback_fit": args.fallback_fit, "ring": args.ring, "max_rings": args.max_rings,
                 "repair_new": args.repair_new, "reproduce": args.reproduce},
         inputs=[args.keyframes, args.classify, args.integrate, args.fit], timings=timings, metrics=metrics,
         docs=DOCS)

@@ -72,6 +72,58 @@ def test_demo_poses_are_repaired(demo_run):
     assert (demo_run / "reports" / "demo" / "summary.md").read_text().count("| demo-") == len(POSES)
 
 
+def test_report_has_every_section_and_non_blank_figures(demo_run):
+    """`snakemake --report` after a run: one self-contained HTML file with the library page and, for
+    every pose, its five figures (captioned PNGs that decode and are not blank)."""
+    import base64
+    import io
+    import json
+    from html.parser import HTMLParser
+    from matplotlib.image import imread
+
+    out = demo_run / "reports" / "demo" / "report.html"
+    proc = snakemake(demo_run, "--report", str(out))
+    assert proc.returncode == 0, proc.stderr[-3000:]
+
+    class Scripts(HTMLParser):
+        """Text of the <script id=...> elements (the report's embedded data)."""
+
+        def __init__(self):
+            super().__init__()
+            self.found, self.current = {}, None
+
+        def handle_starttag(self, tag, attrs):
+            self.current = dict(attrs).get("id") if tag == "script" else None
+
+        def handle_data(self, data):
+            if self.current:
+                self.found[self.current] = self.found.get(self.current, "") + data
+
+    parser = Scripts()
+    parser.feed(out.read_text())
+    data = {k: json.loads(v.strip().split("=", 1)[1].strip().rstrip(";")) for k, v in parser.found.items()
+            if k in ("results", "categories")}
+    poses = data["categories"]["2. Poses"]
+    assert sorted(poses) == [p.name for p in POSES]
+    figures = ("classification", "deviation", "fit", "renders", "timings")
+    for pose in POSES:
+        assert sorted(f.rsplit("/", 1)[1] for f in poses[pose.name]) == [f"{f}.png" for f in figures]
+    library = [f for files in data["categories"]["1. Library"].values() for f in files]
+    assert sorted(f.rsplit("/", 1)[1] for f in library) == ["overview.png", "summary.html"]
+    pngs = 0
+    for path, item in data["results"].items():
+        assert item["caption"].strip(), path
+        payload = base64.b64decode(item["data_uri"].split("base64,", 1)[1])
+        if item["mime_type"] == "image/png":
+            pixels = imread(io.BytesIO(payload))
+            assert pixels.ndim == 3 and pixels[..., :3].var() > 0, path
+            pngs += 1
+        else:
+            table = payload.decode()
+            assert all(f"<td>{p.name}</td>" in table for p in POSES)
+    assert pngs == len(POSES) * len(figures) + 1
+
+
 def test_rerun_is_a_no_op_and_outputs_are_deterministic(demo_run, tmp_path):
     proc = snakemake(demo_run, "-n")
     assert "Nothing to be done" in proc.stdout + proc.stderr

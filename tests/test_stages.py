@@ -13,7 +13,7 @@ from posefix import __version__
 from posefix.h5io import config_hash, inputs_hash
 
 STAGES = ["demo", "validate", "keyframes", "classify", "constraints", "fit", "integrate", "verify", "export",
-          "summary"]
+          "summary", "render", "overview"]
 
 
 def documented_datasets():

@@ -153,3 +153,20 @@ def test_reproduction_holds_back_where_it_would_add_intersections():
     assert len(_pairs(Y, F)) == 0
     on_target = (Y == tgt).all(axis=1) & keep
     assert on_target.sum() > 0.5 * keep.sum() and moved.any()
+
+
+def test_reproduction_moves_held_back_parts_as_far_as_they_can_go():
+    """A dent of the sheet's target reaches through the patch below: the dent goes down as far as it
+    can without touching the patch (the largest fraction found by bisection), the rest is exact."""
+    V, F, ns = _sheet_over_patch()
+    keep, hold = np.zeros(len(V), dtype=bool), np.zeros(len(V), dtype=bool)
+    keep[:ns], hold[ns:] = True, True
+    tgt = V.copy()
+    dent = np.flatnonzero(np.linalg.norm(V[:ns, :2] - 0.5, axis=1) < 0.06)
+    tgt[dent, 2] -= 0.08  # target z = -0.03: through the patch at z = 0
+    none = np.zeros(len(F), dtype=bool)
+    Y, moved = reproduce_targets(V, tgt, F, vertex_adjacency(F, len(V)), keep, hold, none)
+    assert len(_pairs(Y, F)) == 0 and np.array_equal(Y[ns:], V[ns:])
+    assert (Y[dent, 2] > 0).all() and (Y[dent, 2] < 0.05 - 0.04).all()  # at least half way down
+    far = np.linalg.norm(V[:ns, :2] - 0.5, axis=1) > 0.3
+    assert np.array_equal(Y[:ns][far], tgt[:ns][far])

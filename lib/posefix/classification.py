@@ -79,3 +79,19 @@ def constraint_mask(F, n, frame_pairs, ring=1, contacts=None, exclude=()):
     reasons = (hit * EXCLUDED_INTERSECTION | ringed * EXCLUDED_RING | contact * EXCLUDED_CONTACT
                | manual * EXCLUDED_MANUAL | readd * READDED_REFERENCE).astype(np.uint8)
     return mask, reasons
+
+
+def split_frames(pairs, offsets):
+    """Intersecting pairs per key frame from their concatenation (classify.h5 ``pairs``, ``pair_offsets``).
+
+    Parameters
+    ----------
+    pairs : (P, 2) int
+    offsets : (K + 1,) int
+        Frame ``k`` has ``pairs[offsets[k]:offsets[k + 1]]``.
+
+    Returns
+    -------
+    list of K (k_i, 2) int arrays
+    """
+    return [pairs[offsets[k]:offsets[k + 1]] for k in range(len(offsets) - 1)]

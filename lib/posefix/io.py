@@ -6,6 +6,7 @@ A pose library is a folder of triangle meshes (``.obj``, ``.ply``, ``.off``, eac
 problem is raised as :class:`InputError` naming the file and the problem in one line.
 """
 
+import csv
 import gzip
 import hashlib
 import io
@@ -400,6 +401,22 @@ def publish(tmp, path):
     os.umask(umask)
     os.chmod(tmp, 0o666 & ~umask)
     os.replace(tmp, path)
+
+
+def write_figure(path, fig):
+    """Write a matplotlib ``Figure`` as PNG, atomically (same bytes for the same figure)."""
+    buffer = io.BytesIO()
+    fig.savefig(buffer, format="png", metadata={"Software": None})
+    atomic_write_bytes(path, buffer.getvalue())
+
+
+def benchmark_seconds(folder, stage):
+    """Wall seconds from a Snakemake benchmark file ``folder/<stage>*.tsv`` (column ``s``), None when absent."""
+    files = sorted(Path(folder).glob(f"{stage}*.tsv"))
+    if not files:
+        return None
+    with open(files[0]) as fh:
+        return float(next(csv.DictReader(fh, delimiter="\t"))["s"])
 
 
 def file_sha256(path):

@@ -129,7 +129,7 @@ def fallback(X, V_ref, V_tgt, F, mask, frame_pairs, threshold, ring=1, max_rings
         ``V_C``.
     frame_pairs : list of (k_i, 2) int
         Intersecting face pairs per key frame (frame 0 the reference, the last the target).
-    threshold : float
+    threshold : float or (n,) float
         Distance (length units) beyond which a vertex counts as not having reached its target.
     ring : int
         Rings grown around the trigger vertices (first attempt).
@@ -153,9 +153,8 @@ def fallback(X, V_ref, V_tgt, F, mask, frame_pairs, threshold, ring=1, max_rings
     state = _State(X, F, intersecting_faces(frame_pairs[0], m))
 
     def cleanup(state):
-        for rings in range(ring, max_rings + 1) if repair_new else ():
-            if not _untangle(state, V_ref, V_tgt, A, mask, rings, log):
-                break
+        if repair_new:
+            _untangle_rounds(state, V_ref, V_tgt, A, mask, ring, max_rings, log)
 
     far = np.linalg.norm(X - V_tgt, axis=1) > threshold
     for region in _pass_through_regions(F, mask, A, far, ring, frame_pairs):
@@ -168,6 +167,13 @@ def fallback(X, V_ref, V_tgt, F, mask, frame_pairs, threshold, ring=1, max_rings
             state = trial
     cleanup(state)
     return state.X, state.replaced, state.new
+
+
+def _untangle_rounds(state, V_ref, V_tgt, A, mask, ring, max_rings, log):
+    """Remedies on regions of ``ring``, ``ring + 1``, ... ``max_rings`` rings until no new face is left."""
+    for rings in range(ring, max_rings + 1):
+        if not _untangle(state, V_ref, V_tgt, A, mask, rings, log):
+            break
 
 
 def _untangle(state, V_ref, V_tgt, A, mask, rings, log):
@@ -216,14 +222,20 @@ def _remedies(X, V_tgt, V_ref, A, mask, region):
         yield REPLACED_NEW_INTERSECTION, np.flatnonzero(grow_rings(parts, A, 1)), V_tgt
 
 
+BISECTIONS = 4
+"""Bisection steps for the fraction of the correction a held-back part gets (:func:`reproduce_targets`)."""
+
+
 def reproduce_targets(X, V_tgt, F, A, keep, hold, reference_faces, rings=2, attempts=8, log=None):
     """Move ``keep`` vertices onto their targets and blend the residual harmonically into the rest.
 
     The correction ``V_tgt - X`` on ``keep`` is extended to the other vertices by the uniform
     Laplacian (:func:`posefix.harmonic.harmonic_extension`), with zero correction on ``hold``.
     Where the corrected pose has intersecting faces that ``X`` does not (outside
-    ``reference_faces``), both faces of every such pair, grown by ``rings`` rings, are held too and
-    the blend is recomputed, at most ``attempts`` times; then ``X`` is returned unchanged.
+    ``reference_faces``), both faces of every such pair, grown by ``rings`` rings, are held back
+    (zero correction) and the blend is recomputed, at most ``attempts`` times; then ``X`` is
+    returned unchanged. Each held-back part then gets the largest fraction of its correction
+    that adds no intersecting face, found by :data:`BISECTIONS` bisection steps on [0, 1].
 
     Parameters
     ----------
@@ -245,26 +257,63 @@ def reproduce_targets(X, V_tgt, F, A, keep, hold, reference_faces, rings=2, atte
     moved : (n,) bool
         Vertices whose position changed.
     """
-    residual = V_tgt - X
-    held = hold.copy()
     before = intersecting_faces(self_intersecting_pairs(X, F), len(F)) & ~reference_faces
-    for attempt in range(attempts):
-        on_target = keep & ~held
-        Y = X + harmonic_extension(A, np.where(on_target[:, None], residual, 0.0), keep | held)
-        Y[on_target] = V_tgt[on_target]  # bitwise, not up to rounding
+
+    def blend(weight, fixed):
+        """Pose with ``weight`` times the correction on ``keep``, and the new intersecting faces it adds."""
+        given = np.where(keep[:, None], weight[:, None] * (V_tgt - X), 0.0)
+        Y = X + harmonic_extension(A, given, fixed)
+        exact = keep & (weight == 1.0)
+        Y[exact] = V_tgt[exact]  # bitwise, not up to rounding
         pairs = self_intersecting_pairs(Y, F)
-        added = intersecting_faces(pairs, len(F)) & ~reference_faces & ~before
+        return Y, pairs, intersecting_faces(pairs, len(F)) & ~reference_faces & ~before
+
+    weight = np.where(keep & ~hold, 1.0, 0.0)
+    held, conflict = hold.copy(), np.zeros(len(X), dtype=bool)
+    for attempt in range(attempts):
+        Y, pairs, added = blend(weight, keep | held)
         if not added.any():
-            _log_info(log, "reproduction: %d constrained vertices put on their targets, %d held back",
-                      np.count_nonzero(on_target), np.count_nonzero(keep & held))
-            return Y, (Y != X).any(axis=1)
-        seeds = np.zeros(len(X), dtype=bool)
-        seeds[F[pairs[added[pairs].any(axis=1)]].ravel()] = True
-        held |= grow_rings(seeds, A, rings)
+            break
+        conflict[F[pairs[added[pairs].any(axis=1)]].ravel()] = True
+        held |= grow_rings(conflict, A, rings)
+        weight[held] = 0.0
         _log_info(log, "reproduction attempt %d adds %d intersecting faces: %d vertices held back",
                   attempt + 1, added.sum(), np.count_nonzero(held))
-    _log_info(log, "reproduction abandoned after %d attempts", attempts)
-    return X.copy(), np.zeros(len(X), dtype=bool)
+    else:
+        _log_info(log, "reproduction abandoned after %d attempts", attempts)
+        return X.copy(), np.zeros(len(X), dtype=bool)
+    near = grow_rings(conflict, A, 1)
+    for part in _components(held & ~hold, A):
+        fixed = keep | held
+        fixed[part[~keep[part]]] = False  # the part's unconstrained vertices follow harmonically
+        outer = part[~near[part]]  # first the whole part, then the part away from the conflict further
+        for subset, low in ((part, 0.0), (outer, weight[part[0]])):
+            found = _bisect(blend, weight, fixed, subset, low) if len(subset) else None
+            if found is not None:
+                Y, weight = found
+        held[part[weight[part] > 0]] = False
+    partly = keep & (weight > 0) & (weight < 1)
+    _log_info(log, "reproduction: %d constrained vertices put on their targets, %d partly (mean fraction %.2f), "
+              "%d held back", np.count_nonzero(keep & (weight == 1.0)), np.count_nonzero(partly),
+              weight[partly].mean() if partly.any() else 0.0, np.count_nonzero(keep & (weight == 0)))
+    return Y, (Y != X).any(axis=1)
+
+
+def _bisect(blend, weight, fixed, subset, low):
+    """Largest fraction in (low, 1) for ``weight[subset]`` (by bisection) that ``blend`` accepts.
+
+    Returns the accepted ``(pose, weight)``, or None when none above ``low`` is.
+    """
+    high, best = 1.0, None
+    for _ in range(BISECTIONS):
+        trial = weight.copy()
+        trial[subset] = 0.5 * (low + high)
+        Z, _, added = blend(trial, fixed)
+        if added.any():
+            high = trial[subset[0]]
+        else:
+            low, best = trial[subset[0]], (Z, trial)
+    return best
 
 
 def smooth(X, A, region, steps):

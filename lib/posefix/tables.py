@@ -1,0 +1,75 @@
+"""Library-level tables of the report: one row per pose of ``summary.json``, with a status per pose."""
+
+import html
+
+DEVIATION_BAR = 5e-3
+"""Constrained-region max deviation / d above which a pose is flagged (issue 4's acceptance bar)."""
+STATUS_COLORS = {"ok": "#d8f0d8", "fallback": "#fff2c6", "check": "#f8d0d0"}
+
+
+def pose_status(entry, bar=DEVIATION_BAR):
+    """Status of one pose: ``(kind, reason)`` with kind ``ok``, ``fallback`` or ``check``.
+
+    ``check``: new intersecting faces outside the pass-through fallback, or a constrained-region
+    max deviation above ``bar``; ``fallback``: regions copied from the target or untangled (the
+    pose is clean but not all of it came from the integration); ``ok`` otherwise.
+    """
+    faces = entry["intersecting_faces"]
+    outside = faces["repaired_new"] - faces.get("repaired_new_in_fallback", 0)
+    reasons = []
+    if outside > 0:
+        reasons.append(f"{outside} new intersecting faces")
+    if entry["deviation"]["constrained_max"] > bar:
+        reasons.append(f"V_C max deviation {entry['deviation']['constrained_max']:.2g} > {bar:g}")
+    if reasons:
+        return "check", "; ".join(reasons)
+    fallback = entry.get("fallback", {})
+    if entry["fallback_vertices"] > 0:
+        parts = [f"{fallback.get(k, 0)} {k.replace('_', '-')}" for k in ("pass_through", "new_intersection")
+                 if fallback.get(k, 0)]
+        return "fallback", f"{entry['fallback_vertices']} vertices ({', '.join(parts) or 'untangled'})"
+    return "ok", ""
+
+
+COLUMNS = (
+    ("pose", lambda e: e["pose"]),
+    ("status", None),
+    ("target faces", lambda e: e["intersecting_faces"]["target"]),
+    ("key frames max", lambda e: e["intersecting_faces"]["keyframes_max"]),
+    ("repaired faces", lambda e: e["intersecting_faces"]["repaired"]),
+    ("new (in pass-through)", lambda e: f"{e['intersecting_faces']['repaired_new']} "
+                                        f"({e['intersecting_faces'].get('repaired_new_in_fallback', 0)})"),
+    ("V_C", lambda e: e["constraint_vertices"]),
+    ("V_C dev. mean / max", lambda e: f"{e['deviation']['constrained_mean']:.2g} / {e['deviation']['constrained_max']:.2g}"),
+    ("free dev. mean / max", lambda e: f"{e['deviation']['free_mean']:.2g} / {e['deviation']['free_max']:.2g}"),
+    ("centres", lambda e: e["fit"]["centers"]),
+    ("fit max error / d", lambda e: f"{e['fit']['max_error_rel']:.2g}"),
+    ("kappa", lambda e: f"{e['fit']['max_condition']:.2g}"),
+    ("fallback vertices", lambda e: e["fallback_vertices"]),
+    ("fit s", lambda e: f"{e['fit']['seconds']:.1f}"),
+    ("integrate s", lambda e: f"{e['integrate']['seconds']:.2f}"),
+    ("total s", lambda e: f"{e['seconds_total']:.1f}"),
+)
+
+
+def summary_html(library, entries, bar=DEVIATION_BAR):
+    """A self-contained HTML page with the library's table, rows coloured by :func:`pose_status`, str."""
+    counts = {}
+    rows = []
+    for entry in entries:
+        kind, reason = pose_status(entry, bar)
+        counts[kind] = counts.get(kind, 0) + 1
+        cells = [html.escape(f"{kind}: {reason}" if reason else kind) if get is None else html.escape(str(get(entry)))
+                 for _, get in COLUMNS]
+        rows.append(f'<tr style="background:{STATUS_COLORS[kind]}">' + "".join(f"<td>{c}</td>" for c in cells) + "</tr>")
+    head = "".join(f"<th>{html.escape(name)}</th>" for name, _ in COLUMNS)
+    tally = ", ".join(f"{counts.get(k, 0)} {k}" for k in STATUS_COLORS)
+    return (f"<!DOCTYPE html>\n<html><head><meta charset='utf-8'><title>posefix: {html.escape(library)}</title>"
+            "<style>body{font-family:sans-serif;font-size:13px}table{border-collapse:collapse}"
+            "td,th{border:1px solid #999;padding:3px 6px;text-align:right}th{background:#eee}</style></head><body>"
+            f"<h2>posefix summary: {html.escape(library)}</h2>"
+            f"<p>{len(entries)} poses: {tally}. ok: clean and within the deviation bar; fallback: clean, with "
+            f"regions copied from the target or untangled; check: new intersecting faces outside the pass-through "
+            f"fallback or a V_C max deviation above {bar:g} of the bbox diagonal. Deviations are relative to the "
+            "reference's bbox diagonal.</p>"
+            f"<table><thead><tr>{head}</tr></thead><tbody>{''.join(rows)}</tbody></table></body></html>\n")

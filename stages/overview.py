@@ -1,0 +1,50 @@
+"""Stage overview: one page comparing all poses of a library, for the report.
+
+Reads ``summary.json`` and writes ``overview.png`` (intersections before/after, deviation against
+the bar, centres and fallback vertices, seconds per stage, one column per pose) and
+``summary.html`` (the summary table with a status per pose: ok, fallback, check).
+"""
+
+import sys
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "lib"))
+
+import json  # noqa: E402
+
+import posefix  # noqa: E402,F401  (runtime defaults before numpy)
+
+from posefix.cli import Timings, run_stage, stage_parser  # noqa: E402
+from posefix.figures import library_overview  # noqa: E402
+from posefix.io import InputError, atomic_write_bytes, write_figure  # noqa: E402
+from posefix.tables import DEVIATION_BAR, pose_status, summary_html  # noqa: E402
+
+
+def build_parser():
+    parser = stage_parser("overview", __doc__)
+    parser.add_argument("--summary", required=True, help="summary.json of the library")
+    parser.add_argument("--png", required=True, help="overview.png to write")
+    parser.add_argument("--html", required=True, help="summary.html to write")
+    parser.add_argument("--bar", type=float, default=DEVIATION_BAR,
+                        help="V_C max deviation / bbox diagonal above which a pose is flagged")
+    return parser
+
+
+def main(args, log):
+    timings = Timings()
+    try:
+        summary = json.loads(Path(args.summary).read_text())
+        library, entries = summary["library"], summary["poses"]
+    except (ValueError, KeyError, TypeError) as exc:
+        raise InputError(args.summary, f"not a posefix summary.json ({exc})") from None
+    with timings.step("figure", log):
+        write_figure(args.png, library_overview(entries, args.bar, title=f"posefix: {library}"))
+    atomic_write_bytes(args.html, summary_html(library, entries, args.bar).encode())
+    for entry in entries:
+        kind, reason = pose_status(entry, args.bar)
+        if kind != "ok":
+            log.info("%s: %s (%s)", entry["pose"], kind, reason)
+
+
+if __name__ == "__main__":
+    run_stage(build_parser(), main)

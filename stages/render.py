@@ -1,0 +1,79 @@
+"""Stage render: the report figures of one pose (PNG, offscreen).
+
+Writes into ``--out``: ``renders.png`` (target vs repaired, intersecting faces highlighted),
+``deviation.png`` (deviation heat map on the repaired pose with a colour bar, fallback regions),
+``classification.png`` (intersecting faces per key frame before and after, ``V_C`` on the
+reference), ``fit.png`` (fit history: error, condition, seconds per iteration) and
+``timings.png`` (wall seconds per stage from the Snakemake benchmark files). The camera is fixed by
+the reference (the same for every pose of a library). Figures are built in ``posefix.figures``.
+"""
+
+import sys
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "lib"))
+
+import json  # noqa: E402
+
+import posefix  # noqa: E402,F401  (runtime defaults before numpy)
+
+from posefix import figures  # noqa: E402
+from posefix.classification import split_frames  # noqa: E402
+from posefix.cli import Timings, run_stage, stage_parser  # noqa: E402
+from posefix.h5io import read_artifact  # noqa: E402
+from posefix.intersections import intersecting_faces  # noqa: E402
+from posefix.io import benchmark_seconds, write_figure  # noqa: E402
+from posefix.render import camera  # noqa: E402
+
+STAGES = ("keyframes", "classify", "constraints", "fit", "integrate", "verify")
+FIGURES = ("renders", "deviation", "classification", "fit", "timings")
+HISTORY = ("centers", "max_error", "rms_error", "condition", "seconds_evaluate", "seconds_select", "seconds_update")
+
+
+def build_parser():
+    parser = stage_parser("render", __doc__)
+    parser.add_argument("--keyframes", required=True, help="keyframes.h5 of the pose (reference, target, faces)")
+    parser.add_argument("--classify", required=True, help="classify.h5 of the pose (V_C, pairs per key frame)")
+    parser.add_argument("--fit", required=True, help="fit.h5 of the pose (history)")
+    parser.add_argument("--verify", required=True, help="verify.h5 of the pose (repaired pose, deviation)")
+    parser.add_argument("--benchmarks", required=True, help="folder of the pose's Snakemake benchmark files")
+    parser.add_argument("--pose", required=True, help="pose name (figure titles)")
+    parser.add_argument("--out", required=True, help="folder to write the PNG files into")
+    return parser
+
+
+def main(args, log):
+    timings = Timings()
+    with timings.step("read", log):
+        kf, _ = read_artifact(args.keyframes, "keyframes", ["reference", "target", "faces"])
+        cl, _ = read_artifact(args.classify, "classify", ["mask", "pairs", "pair_offsets"])
+        fi, fattrs = read_artifact(args.fit, "fit", [f"history/{k}" for k in HISTORY])
+        ve, _ = read_artifact(args.verify, "verify", ["repaired", "deviation", "replaced", "pairs", "new_faces"])
+    V_ref, V_tgt, F = kf["reference"], kf["target"], kf["faces"]
+    m = len(F)
+    frames = [intersecting_faces(p, m) for p in split_frames(cl["pairs"], cl["pair_offsets"])]
+    repaired_faces = intersecting_faces(ve["pairs"], m)
+    R = camera(V_ref)
+    made = {}
+    with timings.step("figures", log):
+        made["renders"] = figures.renders(V_tgt, ve["repaired"], F, R, frames[-1], repaired_faces, frames[0],
+                                          title=args.pose)
+        made["deviation"] = figures.deviation_map(ve["repaired"], F, R, ve["deviation"], ve["replaced"],
+                                                  title=args.pose)
+        made["classification"] = figures.classification(
+            V_ref, F, R, cl["mask"].astype(bool), [f.sum() for f in frames], int(repaired_faces.sum()),
+            int(ve["new_faces"].sum()), title=args.pose)
+        made["fit"] = figures.fit_history({k: fi[f"history/{k}"] for k in HISTORY},
+                                          float(fattrs["metrics"]["bbox_diagonal"]),
+                                          json.loads(fattrs["config"])["eps_rel"], title=args.pose)
+        made["timings"] = figures.timings({s: benchmark_seconds(args.benchmarks, s) for s in STAGES},
+                                          title=args.pose)
+    with timings.step("write", log):
+        for name in FIGURES:
+            write_figure(Path(args.out) / f"{name}.png", made[name])
+    log.info("wrote %d figures into %s (%s)", len(FIGURES), args.out,
+             ", ".join(f"{k} {v:.2f} s" for k, v in timings.items()))
+
+
+if __name__ == "__main__":
+    run_stage(build_parser(), main)
