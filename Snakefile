@@ -263,7 +263,7 @@ rule summary:
         json=f"{REPORTS}/summary.json",
         md=f"{REPORTS}/summary.md",
     params:
-        results=RESULTS,
+        results=lambda wildcards, input: os.path.dirname(os.path.dirname(input.verify[0])),
         poses=",".join(POSES),
         python=PYTHON,
         script=stage_script("summary"),
