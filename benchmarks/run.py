@@ -7,13 +7,15 @@ peer check (benchmarks/fit.py), the OpenCL integration of every lion pose agains
 (benchmarks/integrate.py),
 and the repair itself (each library's summary.json). Everything is collected into
 ``BENCHMARKS.md`` and ``BENCHMARKS.json`` (plus ``blocked_vs_full.png``) next to the per-library
-pieces; the same command on the same data gives the same tables, times aside.
+pieces (``summary-<library>.md``: the library's per-pose summary); the same command on the same
+data gives the same tables, times aside.
 """
 
 import argparse
 import json
 import os
 import platform
+import shutil
 import subprocess
 import sys
 import time
@@ -66,6 +68,7 @@ def bench_library(lib, out, cores):
     results = ROOT / "results" / name
     pieces = {"pipeline_seconds": pipeline_s,
               "summary": json.loads((ROOT / "reports" / name / "summary.json").read_text())["poses"]}
+    shutil.copyfile(ROOT / "reports" / name / "summary.md", out / f"summary-{name}.md")
     run(sys.executable, ROOT / "benchmarks" / "detector.py", "--results", results, "--out", out / f"detector-{name}",
         "--repeat", 2)
     run(sys.executable, ROOT / "benchmarks" / "fit.py", "--library", name, "--results", results,
