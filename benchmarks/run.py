@@ -4,8 +4,7 @@ Libraries: lion, cat and horse poses from ../shared/data (the demo library when 
 absent, which the report says). Pieces: the self-intersection detector against pymeshlab
 (benchmarks/detector.py) on every key frame, the RBF fit variants on the first pose with the scipy
 peer check (benchmarks/fit.py), the OpenCL integration of every lion pose against numpy on two
-(benchmarks/integrate.py),
-and the repair itself (each library's summary.json). Everything is collected into
+(benchmarks/integrate.py), and the repair itself (each library's summary.json). Everything is collected into
 ``BENCHMARKS.md`` and ``BENCHMARKS.json`` (plus ``blocked_vs_full.png``) next to the per-library
 pieces (``summary-<library>.md``: the library's per-pose summary); the same command on the same
 data gives the same tables, times aside.
