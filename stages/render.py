@@ -71,8 +71,7 @@ def main(args, log):
     with timings.step("write", log):
         for name in FIGURES:
             write_figure(Path(args.out) / f"{name}.png", made[name])
-    log.info("wrote %d figures into %s (%s)", len(FIGURES), args.out,
-             ", ".join(f"{k} {v:.2f} s" for k, v in timings.items()))
+    log.info("wrote %d figures into %s", len(FIGURES), args.out)
 
 
 if __name__ == "__main__":

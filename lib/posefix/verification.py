@@ -20,9 +20,11 @@ Two fallbacks replace regions of the repaired pose by the target's positions:
   Jacobi steps of the uniform Laplacian, boundary fixed); the reference's shape of the region moved
   rigidly onto it (least squares), which restores the reference's own intersection pattern.
 
-Finally :func:`reproduce_targets` puts the untouched constrained vertices exactly on their targets
-(the fit reproduces them only up to its error, S0 §6 "Target shape reproduction") and blends the
-residual harmonically into the rest, except where that would add intersecting faces.
+:func:`reproduce_targets` puts constrained vertices exactly on their targets (the fit reproduces
+them only up to its error, S0 §6 "Target shape reproduction") and blends the residual harmonically
+into the rest; parts where that would add intersecting faces go only as far as they can. Stage
+``verify`` runs it before the two fallbacks (constrained vertices it could not snap and that stay
+far from their targets are the pass-through triggers) and once more after them.
 """
 
 import numpy as np
@@ -129,7 +131,7 @@ def fallback(X, V_ref, V_tgt, F, mask, frame_pairs, threshold, ring=1, max_rings
         ``V_C``.
     frame_pairs : list of (k_i, 2) int
         Intersecting face pairs per key frame (frame 0 the reference, the last the target).
-    threshold : float or (n,) float
+    threshold : float
         Distance (length units) beyond which a vertex counts as not having reached its target.
     ring : int
         Rings grown around the trigger vertices (first attempt).
