@@ -38,6 +38,18 @@ def run_stage(name, *args, check=True):
 
 
 @pytest.fixture(scope="session")
+def demo_run(tmp_path_factory):
+    """The workflow on the demo library, run locally (``snakemake --cores 2``) once per session: the
+    folder it ran in. Read-only for its users (test_pipeline, and test_cluster's reference run)."""
+    work = tmp_path_factory.mktemp("demo-run")
+    cmd = [sys.executable, "-m", "snakemake", "-s", str(ROOT / "Snakefile"), "--directory", str(work),
+           "--cores", "2"]
+    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=900)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    return work
+
+
+@pytest.fixture(scope="session")
 def demo():
     """The demo library in memory: (V_ref, F, poses dict)."""
     from posefix.synth import demo_library

@@ -28,14 +28,6 @@ def _datasets(path):
     return out
 
 
-@pytest.fixture(scope="module")
-def demo_run(tmp_path_factory):
-    work = tmp_path_factory.mktemp("demo-run")
-    proc = snakemake(work)
-    assert proc.returncode == 0, proc.stderr[-3000:]
-    return work
-
-
 def test_demo_run_produces_every_artifact(demo_run):
     results = demo_run / "results" / "demo"
     assert (results / "library.h5").exists()
