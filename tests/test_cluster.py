@@ -8,9 +8,10 @@ munge installed); skipped otherwise. Deselect with ``-m "not cluster"``.
 The run uses the shipped workflow profile unchanged plus the command-line options of
 ``TEST_OPTIONS`` and ``_node_options``, which a cluster without slurmdbd on a small machine needs.
 It repairs two of the demo's four poses (``POSEFIX_CLUSTER_POSES``, "all" for the four): on 2 cores
-every job pays about 7 s for SLURM and the two Snakemake processes it runs, and the plugin notices
-finished jobs 2, 14, 36 s after its last status change, so the chain of 11 dependent stages took
-170 s for two poses and 246 s for four (the local run: about 80 s).
+every job pays about 7 s for SLURM and the two Snakemake processes it runs, and the plugin checks
+for finished jobs i, i + (i + 10), ... seconds after its last status change (i: the first wait, 9 s
+here: most jobs take 7-9 s), so the chain of 11 dependent stages took 138 s for two poses (170 s
+with i = 2; the local run: about 80 s).
 """
 
 import json
@@ -40,13 +41,13 @@ pytestmark = [
 CLUSTER = ROOT / "tests" / "cluster"
 PROFILE = ROOT / "profiles" / "slurm"
 LOCALRULES = {"all", "summary", "overview"}  # the Snakefile's localrules: never submitted
-RUN_TIMEOUT = 600  # seconds for the whole run on the cluster (measured: 170 s on 2 cores)
+RUN_TIMEOUT = 600  # seconds for the whole run on the cluster (measured: 138 s on 2 cores)
 POSES = os.environ.get("POSEFIX_CLUSTER_POSES", "demo-01,demo-04")  # .obj and .obj.gz
 
 TEST_OPTIONS = [
     # No slurmdbd: sacct cannot answer; squeue can while finished jobs stay MinJobAge (300 s) listed.
     "--slurm-status-command", "squeue",
-    "--slurm-init-seconds-before-status-checks", "2",  # default 40 s before the first status check
+    "--slurm-init-seconds-before-status-checks", "9",  # first check after 9 s (default 40): most jobs take 7-9 s
     "--slurm-no-account",  # no accounts on this cluster (plugin 2.8 still guesses, fails, goes on)
     "--slurm-keep-successful-logs",  # .snakemake/slurm_logs/ of every job, as evidence
     "--retries", "0",  # a failure fails the test instead of being retried
