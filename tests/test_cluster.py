@@ -10,7 +10,7 @@ The run uses the shipped workflow profile unchanged plus the command-line option
 It repairs two of the demo's four poses (``POSEFIX_CLUSTER_POSES``, "all" for the four): on 2 cores
 every job pays about 7 s for SLURM and the two Snakemake processes it runs, and the plugin checks
 for finished jobs i, i + (i + 10), ... seconds after its last status change (i: the first wait, 9 s
-here: most jobs take 7-9 s), so the chain of 11 dependent stages took 138–196 s for two poses (165–183 s
+here: most jobs take 7-9 s), so the chain of 11 dependent stages took 138–196 s for two poses (171–183 s
 with i = 2; the local run: about 80 s).
 """
 
