@@ -46,22 +46,23 @@ def main(args, log):
     timings = Timings()
     with timings.step("read", log):
         kf, _ = read_artifact(args.keyframes, "keyframes", ["reference", "target", "faces"])
-        cl, _ = read_artifact(args.classify, "classify", ["mask", "pairs", "pair_offsets"])
+        cl, _ = read_artifact(args.classify, "classify", ["mask", "pairs", "pair_offsets", "intersecting_faces"])
         fi, fattrs = read_artifact(args.fit, "fit", [f"history/{k}" for k in HISTORY])
         ve, _ = read_artifact(args.verify, "verify", ["repaired", "deviation", "replaced", "pairs", "new_faces"])
     V_ref, V_tgt, F = kf["reference"], kf["target"], kf["faces"]
     m = len(F)
-    frames = [intersecting_faces(p, m) for p in split_frames(cl["pairs"], cl["pair_offsets"])]
+    frame_pairs = split_frames(cl["pairs"], cl["pair_offsets"])
+    reference_faces, target_faces = intersecting_faces(frame_pairs[0], m), intersecting_faces(frame_pairs[-1], m)
     repaired_faces = intersecting_faces(ve["pairs"], m)
     R = camera(V_ref)
     made = {}
     with timings.step("figures", log):
-        made["renders"] = figures.renders(V_tgt, ve["repaired"], F, R, frames[-1], repaired_faces, frames[0],
+        made["renders"] = figures.renders(V_tgt, ve["repaired"], F, R, target_faces, repaired_faces, reference_faces,
                                           title=args.pose)
         made["deviation"] = figures.deviation_map(ve["repaired"], F, R, ve["deviation"], ve["replaced"],
                                                   title=args.pose)
         made["classification"] = figures.classification(
-            V_ref, F, R, cl["mask"].astype(bool), [f.sum() for f in frames], int(repaired_faces.sum()),
+            V_ref, F, R, cl["mask"].astype(bool), cl["intersecting_faces"], int(repaired_faces.sum()),
             int(ve["new_faces"].sum()), title=args.pose)
         made["fit"] = figures.fit_history({k: fi[f"history/{k}"] for k in HISTORY},
                                           float(fattrs["metrics"]["bbox_diagonal"]),
