@@ -1,7 +1,8 @@
 # posefix: repair self-intersections in a pose library by space-time integration (S0).
 # Data flow, one pose at a time after the library is validated:
 #   demo (only without --config library=...) -> validate -> keyframes -> classify -> constraints
-#   -> fit -> integrate -> verify -> export (the repaired mesh) and render (report figures);
+#   -> fit -> integrate -> verify -> export (the repaired mesh), render (report figures) and
+#   downstream (Gauss-Newton check of original vs repaired pose, S0 §5, with its figure);
 #   then summary and overview over all poses. `snakemake --report reports/<library>/report.html`
 #   collects the report() outputs (captions in rules/captions/).
 # Rules only wire stage scripts (stages/<rule>.py); the math is in lib/posefix/.
@@ -33,6 +34,7 @@ rule all:
     input:
         [repaired_file(p) for p in POSES],
         expand(f"{REPORTS}/figures/{{pose}}/{{figure}}.png", pose=POSES, figure=FIGURES),
+        expand(f"{REPORTS}/figures/{{pose}}/downstream.png", pose=POSES),
         f"{REPORTS}/summary.json",
         f"{REPORTS}/overview.png",
 
@@ -255,9 +257,44 @@ rule export:
         " --out {output:q} --log {log:q}"
 
 
+rule downstream:
+    input:
+        keyframes=rules.keyframes.output[0],
+        verify=rules.verify.output[0],
+    output:
+        h5=f"{RESULTS}/{{pose}}/downstream.h5",
+        png=report(
+            f"{REPORTS}/figures/{{pose}}/downstream.png",
+            caption="rules/captions/downstream.rst",
+            category="2. Poses",
+            subcategory="{pose}",
+            labels={"pose": "{pose}", "figure": "Gauss-Newton check"},
+        ),
+    params:
+        alphas=",".join(map(str, config["downstream"]["alphas"])),
+        k_bend=",".join(map(str, config["downstream"]["k_bend"])),
+        k_stretch=config["downstream"]["k_stretch"],
+        max_iters=config["downstream"]["max_iters"],
+        rel_tol=config["downstream"]["rel_tol"],
+        stall_iters=config["downstream"]["stall_iters"],
+        python=PYTHON,
+        script=stage_script("downstream"),
+    threads: config["downstream"]["threads"]
+    log:
+        f"{RESULTS}/logs/{{pose}}/downstream.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/{{pose}}/downstream.tsv"
+    shell:
+        "{params.python:q} {params.script:q} --keyframes {input.keyframes:q} --verify {input.verify:q}"
+        " --alphas {params.alphas} --k-bend {params.k_bend} --k-stretch {params.k_stretch}"
+        " --max-iters {params.max_iters} --rel-tol {params.rel_tol} --stall-iters {params.stall_iters}"
+        " --threads {threads} --out {output.h5:q} --png {output.png:q} --pose {wildcards.pose:q} --log {log:q}"
+
+
 rule summary:
     input:
         verify=expand(f"{RESULTS}/{{pose}}/verify.h5", pose=POSES),
+        downstream=expand(f"{RESULTS}/{{pose}}/downstream.h5", pose=POSES),
         meshes=[repaired_file(p) for p in POSES],
     output:
         json=f"{REPORTS}/summary.json",

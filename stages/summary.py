@@ -13,13 +13,18 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "lib"))
 import json  # noqa: E402
 
 import posefix  # noqa: E402,F401  (runtime defaults before numpy)
+import numpy as np  # noqa: E402
 
 from posefix.cli import run_stage, stage_parser  # noqa: E402
 from posefix.h5io import read_artifact  # noqa: E402
 from posefix.io import atomic_write_bytes, benchmark_seconds  # noqa: E402
+from posefix.shells import STOP_REASONS  # noqa: E402
+from posefix.tables import downstream_markdown  # noqa: E402
+
+EXAMPLES = ("original", "repaired")  # downstream.h5 "example" 0 and 1
 
 DEVIATIONS = ("constrained_max", "constrained_mean", "constrained_p95", "free_max", "free_mean", "free_p95")
-STAGES = ("keyframes", "classify", "constraints", "fit", "integrate", "verify", "export")
+STAGES = ("keyframes", "classify", "constraints", "fit", "integrate", "verify", "export", "downstream")
 
 
 def build_parser():
@@ -59,9 +64,27 @@ def pose_entry(results, pose):
         "fallback": {"pass_through": int(ve["fallback_pass_through"]),
                      "new_intersection": int(ve["fallback_new_intersection"]),
                      "reproduced": int(ve["reproduced_vertices"])},
+        "downstream": downstream_entry(folder / "downstream.h5"),
         "seconds_stages": seconds,
         "seconds_total": sum(v for v in seconds.values() if v is not None),
     }
+
+
+def downstream_entry(path):
+    """``downstream`` of a summary entry: per alpha and example, lists over k_b (docs/artifacts.md)."""
+    d, _ = read_artifact(path, "downstream", ["alpha", "k_bend", "example", "iterations", "converged", "reason",
+                                              "final_error", "seconds"])
+    entry = {"k_bend": sorted(set(d["k_bend"].tolist())), "alphas": {}, "seconds": float(d["seconds"].sum())}
+    for alpha in sorted(set(d["alpha"].tolist())):
+        per = entry["alphas"][f"{alpha:g}"] = {}
+        for example, name in enumerate(EXAMPLES):
+            runs = [i for i in np.flatnonzero((d["alpha"] == alpha) & (d["example"] == example))]
+            runs.sort(key=lambda i: d["k_bend"][i])
+            per[name] = {"iterations": [int(d["iterations"][i]) for i in runs],
+                         "converged": [bool(d["converged"][i]) for i in runs],
+                         "reason": [STOP_REASONS[d["reason"][i]] for i in runs],
+                         "final_error": [float(d["final_error"][i]) for i in runs]}
+    return entry
 
 
 def markdown(library, entries):
@@ -85,6 +108,11 @@ def markdown(library, entries):
               "'new' counts faces intersecting in the repaired pose but not in the reference, in brackets those "
               "inside regions copied from the target (pass-through fallback, S0 Fig. 9); '(integrated)' is the "
               "deviation of the integrated pose, before the fallback and the reproduction of V_C."]
+    lines += ["", "## Downstream check: Gauss-Newton discrete shells (S0 §5)", "",
+              *downstream_markdown(entries), "",
+              "Example-driven deformation (Froehlich & Botsch 2011) from the reference towards the original target and "
+              "towards the repaired pose, over the grid of alpha x k_b in config downstream; 'fewer': iteration "
+              "reduction over the settings where both converged."]
     return "\n".join(lines) + "\n"
 
 

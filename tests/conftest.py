@@ -37,13 +37,27 @@ def run_stage(name, *args, check=True):
     return proc
 
 
+# The downstream check (Gauss-Newton discrete shells) on one setting instead of config.yaml's grid of
+# six: the grid costs 2-3 minutes per demo pose on 2 cores, one setting 15-20 s (as in `make run`).
+QUICK_DOWNSTREAM = "downstream={'alphas': [1.0], 'k_bend': [0.01]}"
+
+
+def with_quick_downstream(args):
+    """Snakemake arguments with ``QUICK_DOWNSTREAM`` added to their ``--config`` (or a new one)."""
+    args = [str(a) for a in args]
+    if "--config" in args:
+        i = args.index("--config") + 1
+        return args[:i] + [QUICK_DOWNSTREAM] + args[i:]
+    return args + ["--config", QUICK_DOWNSTREAM]
+
+
 @pytest.fixture(scope="session")
 def demo_run(tmp_path_factory):
     """The workflow on the demo library, run locally (``snakemake --cores 2``) once per session: the
     folder it ran in. Read-only for its users (test_pipeline, and test_cluster's reference run)."""
     work = tmp_path_factory.mktemp("demo-run")
     cmd = [sys.executable, "-m", "snakemake", "-s", str(ROOT / "Snakefile"), "--directory", str(work),
-           "--cores", "2"]
+           *with_quick_downstream(["--cores", "2"])]
     proc = subprocess.run(cmd, capture_output=True, text=True, timeout=900)
     assert proc.returncode == 0, proc.stderr[-3000:]
     return work
@@ -59,3 +73,28 @@ def demo():
 # OpenBLAS threads made small dense operations up to 17x slower on the 2-core CI machines
 # (measured on the greedy fit); the stages cap BLAS to their rule's threads, the tests to one.
 threadpool_limits(1)
+
+
+def pytest_collection_modifyitems(session, config, items):
+    """Cluster tests last (stable order otherwise): their SLURM run starts with the session, in the
+    background (``cluster_background``), and is mostly waiting, so it overlaps everything else."""
+    items.sort(key=lambda item: item.get_closest_marker("cluster") is not None)
+
+
+@pytest.fixture(scope="session", autouse=True)
+def cluster_background(request, tmp_path_factory):
+    """test_cluster.BackgroundRun, started at the session's start when cluster tests are selected and
+    can run here (else None); stopped (the cluster shut down) at the session's end."""
+    if not any(item.get_closest_marker("cluster") for item in request.session.items):
+        yield None
+        return
+    import test_cluster
+    if test_cluster.can_run_here():
+        yield None
+        return
+    run = test_cluster.BackgroundRun(tmp_path_factory.mktemp("slurm"), tmp_path_factory.mktemp("cluster-run"))
+    run.start()
+    try:
+        yield run
+    finally:
+        run.stop()

@@ -1,8 +1,10 @@
 """The demo library on a real SLURM cluster through profiles/slurm (issue 7).
 
-A module fixture starts a one-node cluster on this machine (tests/cluster/slurm-up.sh: slurm-wlm
-and munge from apt, controller and node on 127.0.0.1, no accounting daemon) and always stops it
-again (tests/cluster/slurm-down.sh), also when a test fails. Needs root with apt-get (or slurm and
+A thread started with the session (``BackgroundRun``, from conftest's ``cluster_background``) starts
+a one-node cluster on this machine (tests/cluster/slurm-up.sh: slurm-wlm and munge from apt,
+controller and node on 127.0.0.1, no accounting daemon) and runs the demo through the profile while
+the other tests run (the cluster tests are ordered last and join it); the session's teardown always
+stops the cluster (tests/cluster/slurm-down.sh), also when a test fails. Needs root with apt-get (or slurm and
 munge installed); skipped otherwise. Deselect with ``-m "not cluster"``.
 
 The run uses the shipped workflow profile unchanged plus the command-line options of
@@ -26,7 +28,7 @@ import time
 import pytest
 import yaml
 
-from conftest import ROOT
+from conftest import ROOT, with_quick_downstream
 
 pytestmark = [
     pytest.mark.cluster,
@@ -59,24 +61,6 @@ def _run(cmd, timeout, **kwargs):
     """subprocess.run under coreutils' timeout (TERM, then KILL 10 s later), output captured."""
     return subprocess.run(["timeout", "-k", "10", str(timeout), *map(str, cmd)], capture_output=True,
                           text=True, **kwargs)
-
-
-@pytest.fixture(scope="module")
-def slurm(tmp_path_factory):
-    """A running one-node SLURM cluster: the environment to talk to it (SLURM_CONF set)."""
-    state = tmp_path_factory.mktemp("slurm")
-    env = {**os.environ, "SLURM_CONF": str(state / "slurm.conf")}
-    try:
-        up = _run([CLUSTER / "slurm-up.sh", state], 600, env=env)
-        print(up.stdout, up.stderr, sep="")
-        if up.returncode == 3:
-            reason = (up.stderr.strip().splitlines() or ["slurm-up.sh exited 3"])[-1]
-            pytest.skip(f"cannot start a SLURM cluster here: {reason}")
-        assert up.returncode == 0, f"slurm-up.sh failed ({up.returncode}):\n{up.stdout}\n{up.stderr}"
-        yield env
-    finally:
-        down = _run([CLUSTER / "slurm-down.sh", state], 120, env=env)
-        print(down.stdout, down.stderr, sep="")
 
 
 def _node_options(env):
@@ -138,38 +122,90 @@ def _without_timing(value):
     return value
 
 
+class BackgroundRun(threading.Thread):
+    """The cluster part, in a thread from the session's start (conftest's ``cluster_background``):
+    start the one-node cluster (slurm-up.sh: apt-get when needed), then run the demo through the
+    workflow profile. It waits mostly on SLURM and Snakemake's status checks, so it overlaps the
+    rest of the suite; the tests of this module, ordered last, join it. ``stop`` always runs
+    slurm-down.sh (fixture teardown, also after a failure or an interrupt).
+
+    After ``join``: ``skip`` (why the cluster cannot run here) or ``error`` or ``result`` =
+    (work folder, CompletedProcess, log text, SLURM jobs of the run); ``log`` the scripts' output
+    and the timings.
+    """
+
+    def __init__(self, state, work):
+        super().__init__(daemon=True)
+        self.state, self.work = state, work
+        self.env = {**os.environ, "SLURM_CONF": str(state / "slurm.conf")}
+        self.skip = self.error = self.result = None
+        self.log = []
+
+    def run(self):
+        try:
+            start = time.monotonic()
+            up = _run([CLUSTER / "slurm-up.sh", self.state], 600, env=self.env)
+            self.log += [up.stdout, up.stderr, f"slurm-up.sh: exit {up.returncode} after "
+                                               f"{time.monotonic() - start:.0f} s"]
+            if up.returncode == 3:
+                self.skip = (up.stderr.strip().splitlines() or ["slurm-up.sh exited 3"])[-1]
+            elif up.returncode != 0:
+                self.error = f"slurm-up.sh failed ({up.returncode})"
+            else:
+                self.result = self._workflow()
+        except Exception as exc:  # reported by the tests, not lost in the thread
+            self.error = repr(exc)
+
+    def _workflow(self):
+        cmd = [sys.executable, "-m", "snakemake", "-s", ROOT / "Snakefile", "--directory", self.work,
+               "--workflow-profile", PROFILE, *TEST_OPTIONS, *_node_options(self.env)]
+        cmd = with_quick_downstream(cmd + (["--config", f"poses={POSES}"] if POSES != "all" else []))
+        watch = _QueueWatch(self.env)
+        watch.start()
+        start = time.monotonic()
+        try:
+            proc = _run(cmd, RUN_TIMEOUT, env=self.env)
+        finally:
+            watch.stop.set()
+            watch.join()
+        seconds = time.monotonic() - start
+        watch.poll()  # finished jobs stay listed for MinJobAge (300 s)
+        log = proc.stdout + proc.stderr
+        (self.work / "snakemake.log").write_text(log)
+        run_id = re.search(r"SLURM run ID: (\S+)", log)
+        jobs = {j: v for j, v in watch.jobs.items() if run_id and v[0] == run_id.group(1)}
+        table = "\n".join(f"{j:>6} {_rule_of(c):<12} {c:<40} {s}" for j, (_, c, s) in
+                          sorted(jobs.items(), key=lambda kv: int(kv[0])))
+        (self.work / "slurm-jobs.txt").write_text(table + "\n")
+        self.log.append(f"cluster run: exit {proc.returncode} after {seconds:.0f} s in {self.work}; "
+                        f"SLURM jobs:\n{table}")
+        return self.work, proc, log, jobs
+
+    def stop(self):
+        """Wait for the run (it is bounded by its timeouts), then stop the cluster."""
+        self.join(timeout=600 + RUN_TIMEOUT + 60)
+        down = _run([CLUSTER / "slurm-down.sh", self.state], 120, env=self.env)
+        print(down.stdout, down.stderr, sep="")
+
+
+def can_run_here():
+    """Why the cluster part cannot run on this machine (the module's skip reasons), or None."""
+    for mark in pytestmark:
+        if mark.name == "skipif" and mark.args[0]:
+            return mark.kwargs["reason"]
+    return None
+
+
 @pytest.fixture(scope="module")
-def cluster_run(slurm, request, tmp_path_factory):
-    """The demo workflow through ``--workflow-profile profiles/slurm``: (its folder, the
-    CompletedProcess, its output, the SLURM jobs of the run, the local run's folder). The local
-    reference run (the session's demo_run) is requested only once the cluster is up, so that a
-    cluster that cannot start skips at once, and made before the cluster run, so that the two do
-    not share the cores."""
-    local = request.getfixturevalue("demo_run")
-    work = tmp_path_factory.mktemp("cluster-run")
-    cmd = [sys.executable, "-m", "snakemake", "-s", ROOT / "Snakefile", "--directory", work,
-           "--workflow-profile", PROFILE, *TEST_OPTIONS, *_node_options(slurm)]
-    if POSES != "all":
-        cmd += ["--config", f"poses={POSES}"]
-    watch = _QueueWatch(slurm)
-    watch.start()
-    start = time.monotonic()
-    try:
-        proc = _run(cmd, RUN_TIMEOUT, env=slurm)
-    finally:
-        watch.stop.set()
-        watch.join()
-    seconds = time.monotonic() - start
-    watch.poll()  # finished jobs stay listed for MinJobAge (300 s)
-    log = proc.stdout + proc.stderr
-    (work / "snakemake.log").write_text(log)
-    run_id = re.search(r"SLURM run ID: (\S+)", log)
-    jobs = {j: v for j, v in watch.jobs.items() if run_id and v[0] == run_id.group(1)}
-    table = "\n".join(f"{j:>6} {_rule_of(c):<12} {c:<40} {s}" for j, (_, c, s) in
-                      sorted(jobs.items(), key=lambda kv: int(kv[0])))
-    (work / "slurm-jobs.txt").write_text(table + "\n")
-    print(f"cluster run: exit {proc.returncode} after {seconds:.0f} s in {work}; SLURM jobs:\n{table}")
-    return work, proc, log, jobs, local
+def cluster_run(cluster_background, request):
+    """The background run, finished: (its folder, the CompletedProcess, its output, the SLURM jobs
+    of the run, the local run's folder: the session's demo_run)."""
+    cluster_background.join(timeout=600 + RUN_TIMEOUT + 60)
+    print("\n".join(cluster_background.log))
+    if cluster_background.skip:
+        pytest.skip(f"cannot start a SLURM cluster here: {cluster_background.skip}")
+    assert cluster_background.error is None, cluster_background.error
+    return (*cluster_background.result, request.getfixturevalue("demo_run"))
 
 
 def test_demo_runs_on_slurm_with_the_workflow_profile(cluster_run):

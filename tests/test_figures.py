@@ -88,3 +88,37 @@ def test_pose_status_flags_what_needs_a_look():
     page = summary_html("lib <x>", [_entry("a"), _entry("c", new=6, inside=4)])
     assert page.count("<tr style=") == 2 and "lib &lt;x&gt;" in page and "1 ok, 0 fallback, 1 check" in page
     assert _pixels(figures.library_overview([_entry("a"), _entry("c", new=6, inside=4)])).var() > 0
+
+
+def _downstream(iterations_original, converged_original, iterations_repaired, converged_repaired):
+    """A summary entry's ``downstream`` with one alpha and the runs given per k_b."""
+    def runs(iterations, converged):
+        return {"iterations": iterations, "converged": converged, "final_error": [0.0] * len(iterations),
+                "reason": ["converged" if c else "stall" for c in converged]}
+    return {"k_bend": [1e-3, 1e-2, 1e-1][:len(iterations_original)], "seconds": 1.0,
+            "alphas": {"1": {"original": runs(iterations_original, converged_original),
+                             "repaired": runs(iterations_repaired, converged_repaired)}}}
+
+
+def test_downstream_counts_compare_only_runs_where_both_converged():
+    from posefix.tables import downstream_counts, downstream_markdown
+    e = {**_entry("a"), "downstream": _downstream([40, 50, 200], [True, True, False], [20, 30, 25],
+                                                   [True, False, True])}
+    c = downstream_counts(e)
+    assert c["runs"] == 3 and c["converged_original"] == 2 and c["converged_repaired"] == 2
+    assert (c["iterations_original"], c["iterations_repaired"]) == (290, 75)
+    assert (c["paired"], c["paired_original"], c["paired_repaired"]) == (1, 40, 20)  # only k_b 1e-3
+    lines = downstream_markdown([e, e])
+    assert lines[2].endswith("| 1 | 40 / 20 | 50% |") and lines[-1].startswith("| **all** | 6 | 4 | 4 |")
+    fig = figures.library_overview([e, {**_entry("b"), "downstream": _downstream([9], [False], [5], [True])}])
+    assert len(fig.axes) == 6 and _pixels(fig).var() > 0
+
+
+def test_downstream_history_draws_every_run():
+    runs = [{"alpha": a, "k_bend": k, "example": ex, "errors": np.geomspace(10.0, 1e-20 if c else 1.0, 8),
+             "converged": c, "reason": "converged" if c else "collapsed triangle"}
+            for a in (0.5, 1.0) for k in (1e-3, 1e-2) for ex, c in (("original", False), ("repaired", True))]
+    runs[-1]["errors"] = np.array([3.0, 0.0])  # zero energy is drawn (clipped), not dropped
+    fig = figures.downstream_history(runs, title="x")
+    assert len(fig.axes) == 2 and all(len(ax.get_lines()) == 8 for ax in fig.axes)
+    assert _pixels(fig).var() > 0

@@ -7,7 +7,7 @@ import h5py
 import numpy as np
 import pytest
 
-from conftest import ROOT, shared_library
+from conftest import ROOT, shared_library, with_quick_downstream
 from posefix.io import write_mesh
 from posefix.synth import POSES
 
@@ -15,9 +15,10 @@ pytestmark = pytest.mark.pipeline
 
 
 def snakemake(workdir, *args):
-    """Run the workflow with this interpreter's snakemake in ``workdir``; returns the CompletedProcess."""
+    """Run the workflow with this interpreter's snakemake in ``workdir`` (one downstream setting, as
+    the session's demo run); returns the CompletedProcess."""
     cmd = [sys.executable, "-m", "snakemake", "-s", str(ROOT / "Snakefile"), "--directory", str(workdir),
-           "--cores", "2", *args]
+           *with_quick_downstream(["--cores", "2", *args])]
     return subprocess.run(cmd, capture_output=True, text=True, timeout=900)
 
 
@@ -32,7 +33,7 @@ def test_demo_run_produces_every_artifact(demo_run):
     results = demo_run / "results" / "demo"
     assert (results / "library.h5").exists()
     for pose in POSES:
-        for stage in ("keyframes", "classify", "constraints", "fit", "integrate", "verify"):
+        for stage in ("keyframes", "classify", "constraints", "fit", "integrate", "verify", "downstream"):
             assert (results / pose.name / f"{stage}.h5").exists()
             assert (results / "benchmarks" / pose.name / f"{stage}.tsv").exists()
             assert (results / "logs" / pose.name / f"{stage}.log").read_text().strip()
@@ -56,17 +57,28 @@ def test_demo_poses_are_repaired(demo_run):
         assert e["deviation"]["constrained_mean"] <= 1e-3 and e["deviation"]["constrained_max"] <= 5e-3
         assert e["integrated_deviation"]["constrained_mean"] <= 1e-3  # before the snap to the target
         assert e["integrate"]["steps_max"] > 0 and e["seconds_total"] > 0
+        # the downstream check ran with the session's one setting, towards both examples
+        down = e["downstream"]
+        assert down["k_bend"] == [0.01] and list(down["alphas"]) == ["1"]
+        for example in ("original", "repaired"):
+            run = down["alphas"]["1"][example]
+            assert len(run["iterations"]) == 1 and run["iterations"][0] >= 1
+            assert run["converged"][0] == (run["reason"][0] == "converged")
+        # the point of the repair (S0 §5): Gauss-Newton converges towards every repaired demo pose
+        # (towards the originals it collapsed a triangle on 3 of the 4 when this was written)
+        assert down["alphas"]["1"]["repaired"]["converged"] == [True], e["pose"]
     lib = demo_run / "data" / "demo"
     for pose in POSES:
         V_tgt, F = read_mesh(lib / f"{pose.name}{pose.suffix}")
         V, F2 = read_mesh(demo_run / "results" / "demo" / "repaired" / f"{pose.name}{pose.suffix}")
         assert np.array_equal(F, F2) and V.shape == V_tgt.shape
-    assert (demo_run / "reports" / "demo" / "summary.md").read_text().count("| demo-") == len(POSES)
+    markdown = (demo_run / "reports" / "demo" / "summary.md").read_text()
+    assert markdown.count("| demo-") == 2 * len(POSES)  # the repair table and the downstream table
 
 
 def test_report_has_every_section_and_non_blank_figures(demo_run):
     """`snakemake --report` after a run: one self-contained HTML file with the library page and, for
-    every pose, its five figures (captioned PNGs that decode and are not blank)."""
+    every pose, its six figures (captioned PNGs that decode and are not blank)."""
     import base64
     import io
     import json
@@ -97,7 +109,7 @@ def test_report_has_every_section_and_non_blank_figures(demo_run):
             if k in ("results", "categories")}
     poses = data["categories"]["2. Poses"]
     assert sorted(poses) == [p.name for p in POSES]
-    figures = ("classification", "deviation", "fit", "renders", "timings")
+    figures = ("classification", "deviation", "downstream", "fit", "renders", "timings")
     for pose in POSES:
         assert sorted(f.rsplit("/", 1)[1] for f in poses[pose.name]) == [f"{f}.png" for f in figures]
     library = [f for files in data["categories"]["1. Library"].values() for f in files]

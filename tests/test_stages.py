@@ -13,7 +13,7 @@ from posefix import __version__
 from posefix.h5io import config_hash, inputs_hash
 
 STAGES = ["demo", "validate", "keyframes", "classify", "constraints", "fit", "integrate", "verify", "export",
-          "summary", "render", "overview"]
+          "downstream", "summary", "render", "overview"]
 
 
 def documented_datasets():
@@ -64,10 +64,13 @@ def demo_artifacts(tmp_path_factory):
               "--keyframes", tmp / "keyframes.h5", "--out", tmp / "integrate.h5")
     run_stage("verify", "--keyframes", tmp / "keyframes.h5", "--classify", tmp / "classify.h5",
               "--integrate", tmp / "integrate.h5", "--fit", tmp / "fit.h5", "--out", tmp / "verify.h5")
+    run_stage("downstream", "--keyframes", tmp / "keyframes.h5", "--verify", tmp / "verify.h5", "--alphas", 1.0,
+              "--k-bend", "0.01,0.1", "--max-iters", 4, "--out", tmp / "downstream.h5", "--png", tmp / "downstream.png")
     return tmp
 
 
-@pytest.mark.parametrize("stage", ["validate", "keyframes", "classify", "constraints", "fit", "integrate", "verify"])
+@pytest.mark.parametrize("stage", ["validate", "keyframes", "classify", "constraints", "fit", "integrate", "verify",
+                                   "downstream"])
 def test_artifact_attributes_and_documentation(demo_artifacts, stage):
     path = demo_artifacts / ("library.h5" if stage == "validate" else f"{stage}.h5")
     docs = documented_datasets()[stage]
@@ -81,6 +84,23 @@ def test_artifact_attributes_and_documentation(demo_artifacts, stage):
         assert not undocumented(names, docs) and not unwritten(names, docs)
         for name in names:
             assert fh[name].attrs["description"] and "units" in fh[name].attrs
+
+
+def test_downstream_runs_every_setting_towards_both_examples(demo_artifacts):
+    from posefix.shells import STOP_REASONS
+    with h5py.File(demo_artifacts / "downstream.h5", "r") as fh:
+        assert fh["alpha"][()].tolist() == [1.0] * 4 and fh["k_bend"][()].tolist() == [0.01, 0.01, 0.1, 0.1]
+        assert fh["example"][()].tolist() == [0, 1, 0, 1]
+        iterations, offsets = fh["iterations"][()], fh["error_offsets"][()]
+        assert np.all((iterations >= 1) & (iterations <= 4)) and np.array_equal(np.diff(offsets), iterations + 1)
+        errors = fh["errors"][()]
+        for i in range(4):  # every accepted step lowers the energy
+            assert np.all(np.diff(errors[offsets[i]:offsets[i + 1]]) < 0)
+        reasons = [STOP_REASONS[r] for r in fh["reason"][()]]
+        assert fh["converged"][()].tolist() == [r == "converged" for r in reasons]
+        metrics = fh["metrics"].attrs
+        assert metrics["runs"] == 4 and metrics["original_iterations"] == iterations[[0, 2]].sum()
+    assert (demo_artifacts / "downstream.png").stat().st_size > 10_000
 
 
 def test_keyframes_and_classify_contents(demo_artifacts):

@@ -12,6 +12,7 @@ from matplotlib.figure import Figure
 from matplotlib.patches import Patch
 
 from posefix.render import HIGHLIGHT, SECONDARY, draw_mesh, face_values, heat_colors, view_limits
+from posefix.tables import downstream_counts
 
 DPI = 110
 
@@ -185,8 +186,58 @@ def timings(seconds, title=""):
     return fig
 
 
+def downstream_history(runs, title=""):
+    """Energy per Gauss–Newton iteration of the downstream check, one panel per alpha.
+
+    Parameters
+    ----------
+    runs : list of dict
+        One per run: ``alpha``, ``k_bend`` (floats), ``example`` ("original" or "repaired"),
+        ``errors`` (iterations + 1,) float, ``converged`` (bool), ``reason`` (str).
+    """
+    alphas = sorted({r["alpha"] for r in runs})
+    k_bends = sorted({r["k_bend"] for r in runs})
+    colors = {k: f"C{i}" for i, k in enumerate(k_bends)}
+    fig = Figure(figsize=(5 * len(alphas) + 1, 4.2), dpi=DPI)
+    for i, alpha in enumerate(alphas):
+        ax = fig.add_subplot(1, len(alphas), i + 1)
+        for r in (r for r in runs if r["alpha"] == alpha):
+            errors = np.maximum(r["errors"], 1e-30)
+            style = "-" if r["example"] == "repaired" else "--"
+            ax.semilogy(np.arange(len(errors)), errors, style, color=colors[r["k_bend"]],
+                        label=f"{r['example']}, k_b {r['k_bend']:g}: {len(errors) - 1} it., "
+                              f"{'converged' if r['converged'] else r['reason']}")
+            ax.plot(len(errors) - 1, errors[-1], "o" if r["converged"] else "x", color=colors[r["k_bend"]])
+        ax.set_xlabel("Gauss-Newton iteration")
+        ax.set_ylabel("energy (sum of squared residuals)")
+        ax.set_title(f"alpha = {alpha:g}  (solid: repaired, dashed: original; o converged, x not)", fontsize=9)
+        ax.legend(fontsize=6.5)
+    fig.suptitle(title, fontsize=11)
+    fig.tight_layout()
+    return fig
+
+
+def _downstream_panels(fig, x, counts):
+    """Overview panels 5 and 6: Gauss–Newton convergence and iterations, original vs repaired."""
+    ax = fig.add_subplot(3, 2, 5)
+    ax.bar(x - 0.2, [c["converged_original"] for c in counts], 0.4, color="tab:gray", label="original target")
+    ax.bar(x + 0.2, [c["converged_repaired"] for c in counts], 0.4, color="tab:green", label="repaired pose")
+    ax.axhline(counts[0]["runs"], color="k", ls=":", label="runs per example")
+    ax.set_ylabel("converged Gauss-Newton runs")
+    ax.legend(fontsize=8)
+    ax = fig.add_subplot(3, 2, 6)
+    ax.bar(x - 0.2, [c["paired_original"] for c in counts], 0.4, color="tab:gray", label="original target")
+    ax.bar(x + 0.2, [c["paired_repaired"] for c in counts], 0.4, color="tab:green", label="repaired pose")
+    for xi, c in zip(x, counts):
+        ax.annotate(str(c["paired"]), (xi, max(c["paired_original"], c["paired_repaired"])), ha="center",
+                    va="bottom", fontsize=7)
+    ax.set_ylabel("iterations where both converged (n runs on top)")
+    ax.legend(fontsize=8)
+
+
 def library_overview(entries, bar=5e-3, title=""):
-    """All poses of a library at a glance: intersections, deviation, centres, seconds.
+    """All poses of a library at a glance: intersections, deviation, centres, seconds, and the
+    downstream Gauss–Newton check (converged runs, iterations) when the entries have it.
 
     Parameters
     ----------
@@ -197,8 +248,9 @@ def library_overview(entries, bar=5e-3, title=""):
     """
     poses = [e["pose"] for e in entries]
     x = np.arange(len(poses))
-    fig = Figure(figsize=(max(10, 0.9 * len(poses) + 4), 7.5), dpi=DPI)
-    ax = fig.add_subplot(2, 2, 1)
+    rows = 3 if all("downstream" in e for e in entries) else 2
+    fig = Figure(figsize=(max(10, 0.9 * len(poses) + 4), 3.75 * rows), dpi=DPI)
+    ax = fig.add_subplot(rows, 2, 1)
     ax.bar(x - 0.2, [e["intersecting_faces"]["target"] for e in entries], 0.4, label="target")
     new = np.array([e["intersecting_faces"]["repaired_new"] for e in entries])
     inside = np.array([e["intersecting_faces"].get("repaired_new_in_fallback", 0) for e in entries])
@@ -206,7 +258,7 @@ def library_overview(entries, bar=5e-3, title=""):
     ax.bar(x + 0.2, inside, 0.4, bottom=new - inside, color="tab:pink", label="repaired: new, in pass-through")
     ax.set_ylabel("intersecting faces")
     ax.legend(fontsize=8)
-    ax = fig.add_subplot(2, 2, 2)
+    ax = fig.add_subplot(rows, 2, 2)
     for key, marker, label in (("constrained_max", "o", "V_C max"), ("constrained_mean", "s", "V_C mean"),
                                ("free_max", "^", "free max")):
         ax.plot(x, [e["deviation"][key] for e in entries], marker, label=label)
@@ -215,14 +267,14 @@ def library_overview(entries, bar=5e-3, title=""):
     ax.set_ylim(bottom=0)
     ax.set_ylabel("deviation / bbox diagonal (linear below 1e-5)")
     ax.legend(fontsize=8)
-    ax = fig.add_subplot(2, 2, 3)
+    ax = fig.add_subplot(rows, 2, 3)
     ax.bar(x - 0.2, [e["fit"]["centers"] for e in entries], 0.4, color="tab:purple", label="RBF centres")
     ax.bar(x + 0.2, [e["fallback_vertices"] for e in entries], 0.4, color="tab:orange", label="fallback vertices")
     ax.set_yscale("symlog", linthresh=10)
     ax.set_ylim(bottom=0)
     ax.set_ylabel("count")
     ax.legend(fontsize=8)
-    ax = fig.add_subplot(2, 2, 4)
+    ax = fig.add_subplot(rows, 2, 4)
     bottom = np.zeros(len(entries))
     for stage in entries[0]["seconds_stages"]:
         values = np.array([e["seconds_stages"].get(stage) or 0.0 for e in entries])
@@ -230,6 +282,8 @@ def library_overview(entries, bar=5e-3, title=""):
         bottom += values
     ax.set_ylabel("wall seconds per stage")
     ax.legend(fontsize=7, ncol=2)
+    if rows == 3:
+        _downstream_panels(fig, x, [downstream_counts(e) for e in entries])
     for ax in fig.axes:
         ax.set_xticks(x, poses, rotation=45, ha="right", fontsize=8)
     fig.suptitle(title, fontsize=12)

@@ -31,6 +31,74 @@ def pose_status(entry, bar=DEVIATION_BAR):
     return "ok", ""
 
 
+def downstream_counts(entry):
+    """Gauss–Newton runs of one pose (``summary.json``'s ``downstream``) tallied, dict.
+
+    ``runs`` per example, ``converged_original`` / ``converged_repaired`` counts,
+    ``iterations_original`` / ``iterations_repaired`` summed over all runs, and ``paired`` with
+    the iterations summed over the settings where both converged (the fair comparison of speed).
+    """
+    out = {"runs": 0, "converged_original": 0, "converged_repaired": 0, "iterations_original": 0,
+           "iterations_repaired": 0, "paired": 0, "paired_original": 0, "paired_repaired": 0}
+    for per in entry["downstream"]["alphas"].values():
+        o, r = per["original"], per["repaired"]
+        out["runs"] += len(o["iterations"])
+        for name, runs in (("original", o), ("repaired", r)):
+            out[f"converged_{name}"] += sum(runs["converged"])
+            out[f"iterations_{name}"] += sum(runs["iterations"])
+        for io, co, ir, cr in zip(o["iterations"], o["converged"], r["iterations"], r["converged"]):
+            if co and cr:
+                out["paired"] += 1
+                out["paired_original"] += io
+                out["paired_repaired"] += ir
+    return out
+
+
+def downstream_markdown(entries):
+    """Markdown table of :func:`downstream_counts` per pose and in total, list of str lines."""
+    lines = ["| pose | runs | converged original | converged repaired | iterations original / repaired (all runs) "
+             "| both converged | their iterations original / repaired | fewer |",
+             "|---|---:|---:|---:|---|---:|---|---:|"]
+    total = {}
+    for e in entries:
+        c = downstream_counts(e)
+        total = {k: total.get(k, 0) + v for k, v in c.items()}
+        lines.append(_downstream_row(e["pose"], c))
+    if len(entries) > 1:
+        lines.append(_downstream_row("**all**", total))
+    return lines
+
+
+def downstream_grid_markdown(entries):
+    """Markdown table of the downstream check per setting (alpha, k_b) over all poses, list of str lines:
+    converged runs original / repaired and the iterations of the settings where both converged."""
+    cells = {}
+    for e in entries:
+        d = e["downstream"]
+        for alpha, per in d["alphas"].items():
+            o, r = per["original"], per["repaired"]
+            for j, k in enumerate(d["k_bend"]):
+                c = cells.setdefault((float(alpha), k), [0, 0, 0, 0, 0, 0])
+                both = o["converged"][j] and r["converged"][j]
+                for i, v in enumerate((1, o["converged"][j], r["converged"][j], both,
+                                       both * o["iterations"][j], both * r["iterations"][j])):
+                    c[i] += int(v)
+    lines = ["| alpha | k_b | poses | converged original | converged repaired | both | their iterations "
+             "original / repaired | fewer |", "|---:|---:|---:|---:|---:|---:|---|---:|"]
+    for (alpha, k), (n, co, cr, both, io, ir) in sorted(cells.items()):
+        fewer = f"{1 - ir / io:.0%}" if io else "-"
+        lines.append(f"| {alpha:g} | {k:g} | {n} | {co} | {cr} | {both} | {io} / {ir} | {fewer} |")
+    return lines
+
+
+def _downstream_row(name, c):
+    fewer = (f"{1 - c['paired_repaired'] / c['paired_original']:+.0%}".replace("+", "") if c["paired_original"]
+             else "-")
+    return (f"| {name} | {c['runs']} | {c['converged_original']} | {c['converged_repaired']} | "
+            f"{c['iterations_original']} / {c['iterations_repaired']} | {c['paired']} | "
+            f"{c['paired_original']} / {c['paired_repaired']} | {fewer} |")
+
+
 COLUMNS = (
     ("pose", lambda e: e["pose"]),
     ("status", None),
@@ -48,6 +116,8 @@ COLUMNS = (
     ("fallback vertices", lambda e: e["fallback_vertices"]),
     ("fit s", lambda e: f"{e['fit']['seconds']:.1f}"),
     ("integrate s", lambda e: f"{e['integrate']['seconds']:.2f}"),
+    ("GN converged original / repaired", lambda e: "{converged_original} / {converged_repaired} of {runs}".format(
+        **downstream_counts(e)) if "downstream" in e else "-"),
     ("total s", lambda e: f"{e['seconds_total']:.1f}"),
 )
 
