@@ -4,7 +4,7 @@ Libraries: lion, cat and horse poses from ../shared/data (the demo library when 
 absent, which the report says). Pieces: the self-intersection detector against pymeshlab
 (benchmarks/detector.py) on every key frame, the RBF fit variants on the first pose with the scipy
 peer check (benchmarks/fit.py), the OpenCL integration of every lion pose against numpy on two
-(benchmarks/integrate.py), and the repair itself (each library's summary.json). Everything is collected into
+(benchmarks/integrate.py), and the repair and the downstream check (each library's summary.json). Everything is collected into
 ``BENCHMARKS.md`` and ``BENCHMARKS.json`` (plus ``blocked_vs_full.png``) next to the per-library
 pieces (``summary-<library>.md``: the library's per-pose summary); the same command on the same
 data gives the same tables, times aside.
@@ -149,6 +149,22 @@ def detector_table(benchmarks):
     return lines
 
 
+def downstream_section(benchmarks):
+    """Markdown lines: the downstream check per library and per setting (from summary.json)."""
+    lines = ["## Downstream check: Gauss-Newton discrete shells, original vs repaired (S0 §5)", "",
+             "Per library (all poses, every setting of the grid):", "",
+             "| library | runs per example | converged original | converged repaired | iterations original / "
+             "repaired (all runs) | both converged | their iterations original / repaired | fewer |",
+             "|---|---:|---:|---:|---|---:|---|---:|"]
+    for name, pieces in benchmarks.items():
+        row = downstream_markdown(pieces["summary"])[-1].split(" | ", 1)[1]  # the "all" row (or the one pose)
+        lines.append(f"| {name} | {row}")
+    entries = [e for pieces in benchmarks.values() for e in pieces["summary"]]
+    return lines + ["", "Per setting (all libraries):", "", *downstream_grid_markdown(entries), "",
+                    "Converged: energy zero, or a full step accepted with |J^T r| reduced 1e4-fold; 'fewer': the "
+                    "iteration reduction where both converged (S0: up to 60 %). Per pose: `summary-<library>.md`.", ""]
+
+
 def report(info, benchmarks, note, out):
     """BENCHMARKS.md text."""
     lines = ["# posefix benchmarks", "", "Command: `make bench` (benchmarks/run.py). " + note, "",
@@ -171,17 +187,7 @@ def report(info, benchmarks, note, out):
     for name, pieces in benchmarks.items():
         if "integrate" in pieces:
             lines += (out / f"integrate-{name}.md").read_text().splitlines()[2:] + [""]
-    lines += ["## Downstream check: Gauss-Newton discrete shells, original vs repaired (S0 §5)", "",
-              "Per library (all poses, every setting of the grid):", "",
-              "| library | runs per example | converged original | converged repaired | both | their iterations "
-              "original / repaired | fewer |", "|---|---:|---:|---:|---:|---|---:|"]
-    for name, pieces in benchmarks.items():
-        row = downstream_markdown(pieces["summary"])[-1].split(" | ", 1)[1]  # the "all" row (or the one pose)
-        lines.append(f"| {name} | {row}")
-    entries = [e for pieces in benchmarks.values() for e in pieces["summary"]]
-    lines += ["", "Per setting (all libraries):", "", *downstream_grid_markdown(entries), "",
-              "Converged: energy zero, or a full step accepted with |J^T r| reduced 1e4-fold; 'fewer': the "
-              "iteration reduction where both converged (S0: up to 60 %). Per pose: `summary-<library>.md`.", ""]
+    lines += downstream_section(benchmarks)
     lines += ["## Self-intersection detector vs pymeshlab", "", *detector_table(benchmarks), "",
               "Ours is exact (filtered orient3d with an exact fallback); pymeshlab's is floating point. "
               "Per pose: `detector-<library>.md`.", ""]

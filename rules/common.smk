@@ -21,11 +21,16 @@ def _typed(value):
         return [_typed(v) for v in value]
     if isinstance(value, str):
         parsed = yaml.safe_load(value) if value.strip() else value
+        if isinstance(parsed, str):  # YAML 1.1 reads "1e-05" (Python's str of 0.00001) as text
+            try:
+                parsed = float(parsed)
+            except ValueError:
+                pass
         return parsed if isinstance(parsed, (bool, int, float, list)) else value
     return value
 
 
-for _section in ("demo", "keyframes", "classify", "constraints", "fit", "integrate", "verify"):
+for _section in ("demo", "keyframes", "classify", "constraints", "fit", "integrate", "verify", "downstream"):
     if isinstance(config.get(_section), dict):
         config[_section] = _typed(config[_section])
 validate(config, "../schemas/config.schema.yaml")

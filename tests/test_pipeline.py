@@ -214,5 +214,9 @@ def test_nested_config_overrides_reach_the_stages(tmp_path):
     assert proc.returncode == 0, proc.stderr[-2000:]
     out = proc.stdout + proc.stderr
     assert "--count 5 --no-align" in out and "--ring 2 --contact 0.01" in out and "--exclude 3,4" in out
+    # after the session's one-setting downstream: replaced; 1e-05 is how Snakemake passes 0.00001 on
+    proc = snakemake(tmp_path, "-n", "-p", "--config", "downstream={'k_bend': [1e-05, 0.1], 'alphas': [0.5]}")
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    assert "--alphas 0.5 --k-bend 1e-05,0.1" in proc.stdout + proc.stderr
     proc = snakemake(tmp_path, "-n", "--config", "classify={'exclude': {'demo-9': [1]}}")
     assert proc.returncode != 0 and "classify.exclude names pose(s) not in the library: demo-9" in proc.stderr
