@@ -22,9 +22,9 @@ from posefix import figures  # noqa: E402
 from posefix.cli import Timings, run_stage, stage_parser  # noqa: E402
 from posefix.h5io import read_artifact, write_artifact  # noqa: E402
 from posefix.io import write_figure  # noqa: E402
-from posefix.shells import STOP_REASONS, SolverSettings, deform_towards, handle_vertices, mesh_hinges  # noqa: E402
+from posefix.shells import (EXAMPLES, STOP_REASONS, SolverSettings, deform_towards, handle_vertices,  # noqa: E402
+                            mesh_hinges)
 
-EXAMPLES = ("original", "repaired")
 DOCS = {
     "alpha": ("1", "interpolation weight of the run's targets, (R,) float64"),
     "k_bend": ("1", "bending stiffness k_b of the run, (R,) float64"),

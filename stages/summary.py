@@ -18,10 +18,9 @@ import numpy as np  # noqa: E402
 from posefix.cli import run_stage, stage_parser  # noqa: E402
 from posefix.h5io import read_artifact  # noqa: E402
 from posefix.io import atomic_write_bytes, benchmark_seconds  # noqa: E402
-from posefix.shells import STOP_REASONS  # noqa: E402
+from posefix.shells import EXAMPLES, STOP_REASONS  # noqa: E402
 from posefix.tables import downstream_markdown  # noqa: E402
 
-EXAMPLES = ("original", "repaired")  # downstream.h5 "example" 0 and 1
 
 DEVIATIONS = ("constrained_max", "constrained_mean", "constrained_p95", "free_max", "free_mean", "free_p95")
 STAGES = ("keyframes", "classify", "constraints", "fit", "integrate", "verify", "export", "downstream")

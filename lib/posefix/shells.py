@@ -29,6 +29,8 @@ from posefix.geometry import face_areas
 from posefix.topology import edges
 
 STOP_REASONS = ("converged", "stall", "max_iters", "line-search failure", "collapsed triangle")
+EXAMPLES = ("original", "repaired")
+"""The two examples of the downstream check (S0 §5), in the order of downstream.h5's ``example`` codes."""
 
 
 def wrap_angle(a):
