@@ -135,7 +135,7 @@ def test_half_way_example_converges_with_a_full_step():
     assert 0.1 < np.abs(theta).max() < 1.0
 
 
-def test_a_run_that_cannot_decrease_is_not_converged():
+def test_a_run_stopped_by_max_iters_is_not_converged():
     V, F = _strip()
     settings = SolverSettings(max_iters=1)
     res = deform_towards(V, F, _bend(V, 2.5, at=3.0), alpha=1.0, k_bend=1e-2, settings=settings)
