@@ -19,7 +19,7 @@ import posefix  # noqa: E402,F401  (runtime defaults before numpy)
 import numpy as np  # noqa: E402
 
 from posefix import figures  # noqa: E402
-from posefix.cli import Timings, run_stage, stage_parser  # noqa: E402
+from posefix.cli import Timings, float_list, run_stage, stage_parser  # noqa: E402
 from posefix.h5io import read_artifact, write_artifact  # noqa: E402
 from posefix.io import write_figure  # noqa: E402
 from posefix.shells import (EXAMPLES, STOP_REASONS, SolverSettings, deform_towards, handle_vertices,  # noqa: E402
@@ -49,8 +49,8 @@ def build_parser():
     parser.add_argument("--out", required=True, help="downstream.h5 to write")
     parser.add_argument("--png", default=None, help="also draw the energy per iteration of every run into this PNG")
     parser.add_argument("--pose", default="", help="pose name (figure title)")
-    parser.add_argument("--alphas", type=_floats, default=[0.5, 1.0], help="interpolation weights, e.g. 0.5,1.0")
-    parser.add_argument("--k-bend", type=_floats, default=[1e-3, 1e-2, 1e-1], help="bending stiffnesses k_b")
+    parser.add_argument("--alphas", type=float_list, default=[0.5, 1.0], help="interpolation weights, e.g. 0.5,1.0")
+    parser.add_argument("--k-bend", type=float_list, default=[1e-3, 1e-2, 1e-1], help="bending stiffnesses k_b")
     parser.add_argument("--k-stretch", type=float, default=1.0, help="stretching stiffness k_l")
     defaults = SolverSettings()
     parser.add_argument("--max-iters", type=int, default=defaults.max_iters, help="Gauss-Newton iterations at most")
@@ -59,10 +59,6 @@ def build_parser():
     parser.add_argument("--stall-iters", type=int, default=defaults.stall_iters,
                         help=f"stop as stalled after this many accepted steps below {defaults.stall_step} in a row")
     return parser
-
-
-def _floats(text):
-    return [float(x) for x in text.replace(",", " ").split()]
 
 
 def main(args, log):

@@ -86,7 +86,16 @@ class Timings(dict):
 
 def int_list(text):
     """Parse ``"1,2, 3"`` into ``[1, 2, 3]`` (argparse type)."""
+    return _number_list(text, int, "integers")
+
+
+def float_list(text):
+    """Parse ``"0.5,1"`` into ``[0.5, 1.0]`` (argparse type)."""
+    return _number_list(text, float, "numbers")
+
+
+def _number_list(text, kind, name):
     try:
-        return [int(x) for x in text.replace(",", " ").split()]
+        return [kind(x) for x in text.replace(",", " ").split()]
     except ValueError:
-        raise argparse.ArgumentTypeError(f"not a list of integers: {text!r}") from None
+        raise argparse.ArgumentTypeError(f"not a list of {name}: {text!r}") from None
