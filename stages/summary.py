@@ -62,7 +62,7 @@ def pose_entry(results, pose):
         "fallback_vertices": int(ve["fallback_vertices"]),
         "fallback": {"pass_through": int(ve["fallback_pass_through"]),
                      "new_intersection": int(ve["fallback_new_intersection"]),
-                     "reproduced": int(ve["reproduced_vertices"])},
+                     "reproduced": int(ve["reproduced_vertices"]), "pushed": int(ve["pushed_vertices"])},
         "downstream": downstream_entry(folder / "downstream.h5"),
         "seconds_stages": seconds,
         "seconds_total": sum(v for v in seconds.values() if v is not None),

@@ -22,7 +22,7 @@ from posefix.cli import Timings, run_stage, stage_parser  # noqa: E402
 from posefix.h5io import read_artifact, write_artifact  # noqa: E402
 from posefix.intersections import intersecting_faces, self_intersecting_pairs  # noqa: E402
 from posefix.topology import vertex_adjacency  # noqa: E402
-from posefix.verification import (REPLACED_PASS_THROUGH, REPRODUCED, deviation, fallback,  # noqa: E402
+from posefix.verification import (PUSHED, REPLACED_PASS_THROUGH, REPRODUCED, deviation, fallback,  # noqa: E402
                                   reproduce_targets)
 
 DOCS = {
@@ -32,7 +32,9 @@ DOCS = {
     "deviation": ("1", "|repaired - target| / bbox diagonal per vertex, (n,) float64"),
     "replaced": ("flags", "fallback per vertex: 1 target (key frames pass through, S0 Fig. 9), 2 target (new "
                           "intersection), 4 smoothed, 8 rigid reference (new intersection), 16 reproduced (moved to the "
-                          "target, residual blended), (n,) uint8"),
+                          "target, residual blended), 32 pushed (unconstrained, out of a contact the snap makes), "
+                          "64 separated (moved apart along the reference's separating axis, new intersection), "
+                          "(n,) uint8"),
     "new_faces": ("bool", "faces intersecting in the repaired pose but not in the reference, (m,) bool"),
     "pairs": ("index", "intersecting face pairs (f < g) of the repaired pose, (P, 2) int64"),
 }
@@ -85,9 +87,9 @@ def main(args, log):
             return X, replaced
         reached = np.linalg.norm(X - V_tgt, axis=1) <= reach
         keep = mask & reached & (replaced == 0)
-        X, moved = reproduce_targets(X, V_tgt, F, A, keep, (replaced > 0) | (mask & ~reached), reference_faces,
-                                     log=log)
-        return X, replaced | np.where(moved, REPRODUCED, 0).astype(np.uint8)
+        X, moved, pushed = reproduce_targets(X, V_tgt, F, A, keep, (replaced > 0) | (mask & ~reached),
+                                             reference_faces, log=log)
+        return X, replaced | (moved * np.uint8(REPRODUCED)) | (pushed * np.uint8(PUSHED))
 
     # first, so that the fallback works on the corrected pose: constrained vertices that could not be
     # snapped (that would add intersections) and stay beyond the threshold trigger the pass-through fallback
@@ -128,10 +130,12 @@ def main(args, log):
 def _fallback_counts(replaced, new, F):
     """Vertex counts per fallback kind and the new faces inside pass-through regions (metrics)."""
     pass_through = (replaced & REPLACED_PASS_THROUGH) > 0
-    return {"fallback_vertices": int(np.count_nonzero(replaced & ~np.uint8(REPRODUCED))),
+    snap = np.uint8(REPRODUCED | PUSHED)
+    return {"fallback_vertices": int(np.count_nonzero(replaced & ~snap)),
             "fallback_pass_through": int(np.count_nonzero(pass_through)),
-            "fallback_new_intersection": int(np.count_nonzero(replaced & ~np.uint8(REPLACED_PASS_THROUGH | REPRODUCED))),
+            "fallback_new_intersection": int(np.count_nonzero(replaced & ~np.uint8(REPLACED_PASS_THROUGH) & ~snap)),
             "reproduced_vertices": int(np.count_nonzero(replaced & REPRODUCED)),
+            "pushed_vertices": int(np.count_nonzero(replaced & PUSHED)),
             "repaired_new_in_fallback": int(new[pass_through[F].any(axis=1)].sum())}
 
 

@@ -1,9 +1,10 @@
-"""Harmonic extension on a mesh graph: exact on linear data of a regular grid, zero without data."""
+"""Harmonic and biharmonic extension on a mesh graph: exact on linear data of a regular grid, zero without data,
+smooth bumps from point data."""
 
 import numpy as np
 
-from posefix.harmonic import harmonic_extension
-from posefix.topology import vertex_adjacency
+from posefix.harmonic import biharmonic_extension, harmonic_extension
+from posefix.topology import grow_rings, vertex_adjacency
 from test_verification import _grid
 
 
@@ -28,3 +29,20 @@ def test_unanchored_components_get_zero_and_known_values_are_kept():
     out = harmonic_extension(A, values, known)
     assert np.allclose(out[:len(V1)], 1.0)  # constant data: constant extension
     assert not out[len(V1):].any()  # the second sheet touches no known vertex
+
+
+def test_biharmonic_bump_from_one_vertex_is_smooth_and_local():
+    """One known vertex in a 4-ring support: zero outside, the value at the vertex, between 0 and it inside,
+    flatter at the top than the harmonic cone (neighbours closer to the peak)."""
+    V, F = _grid(21, 0.0)
+    A = vertex_adjacency(F, len(V))
+    centre = np.zeros(len(V), dtype=bool)
+    centre[10 * 21 + 10] = True
+    support = grow_rings(centre, A, 4) & ~centre
+    values = np.where(centre[:, None], [1.0, -2.0], 0.0)
+    out = biharmonic_extension(A, values, centre, support)
+    assert np.array_equal(out[centre], values[centre]) and not out[~(support | centre)].any()
+    assert (out[support, 0] > 0).all() and (out[support, 0] < 1).all() and np.allclose(out[:, 1], -2 * out[:, 0])
+    cone = harmonic_extension(A, values, ~support)
+    ring1 = (A @ centre) & support
+    assert (out[ring1, 0] > cone[ring1, 0]).all()

@@ -14,8 +14,8 @@ from posefix.intersections import intersecting_faces, self_intersecting_pairs
 from posefix.keyframes import keyframes
 from posefix.synth import capsule
 from posefix.topology import vertex_adjacency
-from posefix.verification import (REPLACED_NEW_INTERSECTION, REPLACED_PASS_THROUGH, RIGID_REFERENCE, SMOOTHED,
-                                  deviation, fallback, reproduce_targets, transient_pairs)
+from posefix.verification import (PUSHED, REPLACED_NEW_INTERSECTION, REPLACED_PASS_THROUGH, RIGID_REFERENCE,
+                                  SEPARATED, SMOOTHED, deviation, fallback, reproduce_targets, transient_pairs)
 
 
 def _pairs(V, F):
@@ -104,16 +104,35 @@ def test_spike_of_a_free_region_is_smoothed_out():
     assert X2[tip, 2] > 0.0
 
 
-def test_rim_of_a_reference_intersection_restored_rigidly():
+def _inflated_pair_of_spheres(scale):
+    """Two unit icospheres that intersect in the reference, the second inflated by ``scale`` in the repaired
+    pose (the rim of the reference's intersection moves over new faces): V_ref, X, F, frame pairs."""
     V1, F1 = icosphere(3)
     V2, F2 = icosphere(3, centre=(1.6, 0.0, 0.0))  # the reference already intersects
     V_ref, F = np.vstack([V1, V2]), np.vstack([F1, F2 + len(V1)])
     X = V_ref.copy()
-    X[len(V1):] = (V_ref[len(V1):] - [1.6, 0, 0]) * 1.04 + [1.6, 0, 0]  # inflated: the rim moves
+    X[len(V1):] = (V_ref[len(V1):] - [1.6, 0, 0]) * scale + [1.6, 0, 0]
     ref_pairs = _pairs(V_ref, F)
     assert (intersecting_faces(_pairs(X, F), len(F)) & ~intersecting_faces(ref_pairs, len(F))).any()
-    X2, replaced, new = fallback(X, V_ref, X, F, np.ones(len(X), bool), [ref_pairs, _pairs(X, F)],
-                                 threshold=10.0, max_rings=6)
+    return V_ref, X, F, [ref_pairs, _pairs(X, F)]
+
+
+def test_rim_of_a_reference_intersection_moved_apart_along_the_reference_axes():
+    """A rim that crept a little over new faces: only the vertices of the new pairs move, by less than an
+    edge, apart along the axes that separate them in the reference."""
+    V_ref, X, F, frame_pairs = _inflated_pair_of_spheres(1.04)
+    X2, replaced, new = fallback(X, V_ref, X, F, np.ones(len(X), bool), frame_pairs, threshold=10.0)
+    assert not new.any() and (replaced == SEPARATED).sum() > 0 and not (replaced & ~np.uint8(SEPARATED)).any()
+    moved = (X2 != X).any(axis=1)
+    assert np.array_equal(moved, replaced > 0)
+    edge = np.linalg.norm(X[F[:, 1]] - X[F[:, 0]], axis=1).mean()
+    assert np.linalg.norm(X2 - X, axis=1).max() < edge
+
+
+def test_rim_of_a_reference_intersection_restored_rigidly():
+    """A rim moved too far for small moves (over an edge): the reference's shape moved rigidly onto the region."""
+    V_ref, X, F, frame_pairs = _inflated_pair_of_spheres(1.2)
+    X2, replaced, new = fallback(X, V_ref, X, F, np.ones(len(X), bool), frame_pairs, threshold=10.0, max_rings=6)
     assert not new.any() and (replaced & RIGID_REFERENCE).any()
 
 
@@ -131,7 +150,7 @@ def test_reproduction_puts_constrained_vertices_on_their_targets():
     keep = np.ones(len(V), dtype=bool)
     keep[:ns] = np.abs(V[:ns, 0] - 0.5) > 0.2  # the sheet's middle band is free
     none = np.zeros(len(F), dtype=bool)
-    Y, moved = reproduce_targets(X, V, F, vertex_adjacency(F, len(V)), keep, np.zeros(len(V), bool), none)
+    Y, moved, _ = reproduce_targets(X, V, F, vertex_adjacency(F, len(V)), keep, np.zeros(len(V), bool), none)
     assert np.array_equal(Y[keep], V[keep]) and moved.all()
     assert np.abs(Y - V).max() < 1e-12  # the blend carries a constant residual exactly
     assert len(_pairs(Y, F)) == 0
@@ -149,7 +168,7 @@ def test_reproduction_holds_back_where_it_would_add_intersections():
     assert len(_pairs(V, F)) == 0
     ramp = V + harmonic_extension(A, np.where(keep[:, None], tgt - V, 0.0), keep)
     assert len(_pairs(ramp, F)) > 0  # a plain blend would add intersections
-    Y, moved = reproduce_targets(V, tgt, F, A, keep, hold, none)
+    Y, moved, _ = reproduce_targets(V, tgt, F, A, keep, hold, none)
     assert len(_pairs(Y, F)) == 0
     on_target = (Y == tgt).all(axis=1) & keep
     assert on_target.sum() > 0.5 * keep.sum() and moved.any()
@@ -165,8 +184,25 @@ def test_reproduction_moves_held_back_parts_as_far_as_they_can_go():
     dent = np.flatnonzero(np.linalg.norm(V[:ns, :2] - 0.5, axis=1) < 0.06)
     tgt[dent, 2] -= 0.08  # target z = -0.03: through the patch at z = 0
     none = np.zeros(len(F), dtype=bool)
-    Y, moved = reproduce_targets(V, tgt, F, vertex_adjacency(F, len(V)), keep, hold, none)
+    Y, moved, _ = reproduce_targets(V, tgt, F, vertex_adjacency(F, len(V)), keep, hold, none)
     assert len(_pairs(Y, F)) == 0 and np.array_equal(Y[ns:], V[ns:])
     assert (Y[dent, 2] > 0).all() and (Y[dent, 2] < 0.05 - 0.04).all()  # at least half way down
     far = np.linalg.norm(V[:ns, :2] - 0.5, axis=1) > 0.3
     assert np.array_equal(Y[:ns][far], tgt[:ns][far])
+
+
+def test_reproduction_pushes_an_unconstrained_patch_out_of_the_way():
+    """The sheet's target has a dent through a free patch below it: the dent goes all the way (bitwise on
+    target) and the patch is pushed down under it, smoothly and by about the dent's depth, not held back."""
+    V, F, ns = _sheet_over_patch()
+    keep = np.zeros(len(V), dtype=bool)
+    keep[:ns] = True
+    tgt = V.copy()
+    dent = np.flatnonzero(np.linalg.norm(V[:ns, :2] - 0.5, axis=1) < 0.06)
+    tgt[dent, 2] -= 0.08  # target z = -0.03: through the patch at z = 0
+    none = np.zeros(len(F), dtype=bool)
+    Y, moved, pushed = reproduce_targets(V, tgt, F, vertex_adjacency(F, len(V)), keep, np.zeros(len(V), bool), none)
+    assert len(_pairs(Y, F)) == 0 and np.array_equal(Y[:ns], tgt[:ns])
+    assert pushed.any() and not pushed[:ns].any() and moved[pushed].all()
+    assert (Y[ns:, 2] <= 0.0).all() and Y[ns:, 2].min() > -0.03 - 0.1  # down, about as deep as the dent
+    assert np.abs(Y[ns:, :2] - V[ns:, :2]).max() < 0.02  # pushed along the separating axis (z)

@@ -81,7 +81,8 @@ def deviation_map(X, F, R, deviation, replaced, title=""):
     bar.set_label("|repaired - target| / bbox diagonal")
     ax = fig.add_subplot(1, 2, 2)
     kinds = [(1, "pass-through: target", "tab:red"), (2, "new intersection: target", "tab:orange"),
-             (4, "smoothed", "tab:green"), (8, "rigid reference", "tab:purple")]
+             (4, "smoothed", "tab:green"), (8, "rigid reference", "tab:purple"),
+             (32, "pushed out of a contact", "tab:blue"), (64, "separated", "tab:brown")]
     colors = np.tile([0.78, 0.78, 0.80], (len(F), 1))
     handles = []
     for flag, label, color in kinds:

@@ -44,3 +44,36 @@ def harmonic_extension(A, values, known):
     L_ss = (sp.diags(degree) - A[solve][:, solve]).tocsc()
     out[solve] = splu(L_ss).solve(A[solve][:, known] @ out[known])
     return out
+
+
+def biharmonic_extension(A, values, known, unknown):
+    """Extend values on ``known`` vertices over ``unknown`` ones by minimizing ``|L u|^2``, u = 0 elsewhere.
+
+    The smooth (C1-like) counterpart of :func:`harmonic_extension` for point-like data: a single
+    known vertex becomes a smooth bump, not a cone, and the bump fades out to zero at the border
+    of ``unknown``.
+
+    Parameters
+    ----------
+    A : (n, n) sparse bool
+        Vertex adjacency.
+    values : (n, k) float
+        Values; only the rows of ``known`` are read.
+    known, unknown : (n,) bool
+        Dirichlet vertices and the vertices to solve for (disjoint); all others are 0.
+
+    Returns
+    -------
+    (n, k) float
+    """
+    A = sp.csr_matrix(A, dtype=np.float64)
+    out = np.zeros_like(values, dtype=np.float64)
+    out[known] = values[known]
+    solve = np.flatnonzero(unknown & ~known)
+    if len(solve) == 0:
+        return out
+    L = (sp.diags(np.asarray(A.sum(axis=1)).ravel()) - A).tocsc()
+    Q = (L.T @ L).tocsr()
+    Q_ss = Q[solve][:, solve] + sp.identity(len(solve)) * 1e-12  # regular where a part touches no zero vertex
+    out[solve] = splu(Q_ss.tocsc()).solve(-(Q[solve][:, np.flatnonzero(known)] @ out[known]))
+    return out

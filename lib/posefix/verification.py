@@ -16,13 +16,17 @@ Two fallbacks replace regions of the repaired pose by the target's positions:
   nearby surfaces into each other although the continuous flow keeps them apart (thin folds and
   near contacts, or the rim of an intersection the reference already has). Both sides of every
   such pair, grown by ``ring`` (then ``ring + 1``, ...) rings, get the first of these that removes
-  new faces and adds none: the target's positions; their unconstrained vertices smoothed (a few
-  Jacobi steps of the uniform Laplacian, boundary fixed); the reference's shape of the region moved
-  rigidly onto it (least squares), which restores the reference's own intersection pattern.
+  new faces and adds none: the pairs' vertices moved apart (less than an edge) along the axis that
+  separates the two faces in the reference (:mod:`posefix.separation`); the target's positions;
+  their unconstrained vertices smoothed (a few Jacobi steps of the uniform Laplacian, boundary
+  fixed); the reference's shape of the region moved rigidly onto it (least squares), which
+  restores the reference's own intersection pattern.
 
 :func:`reproduce_targets` puts constrained vertices exactly on their targets (the fit reproduces
 them only up to its error, S0 §6 "Target shape reproduction") and blends the residual harmonically
-into the rest; parts where that would add intersecting faces go only as far as they can. Stage
+into the rest. Where a snapped surface would then cut an unconstrained one, the unconstrained
+vertices are pushed out along the axis that separated the two faces before the snap, each push a
+smooth (biharmonic) bump over a few rings; parts that still intersect go only as far as they can. Stage
 ``verify`` runs it before the two fallbacks (constrained vertices it could not snap and that stay
 far from their targets are the pass-through triggers) and once more after them.
 """
@@ -32,9 +36,10 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
 from posefix.classification import new_pairs
-from posefix.harmonic import harmonic_extension
+from posefix.harmonic import biharmonic_extension, harmonic_extension
 from posefix.intersections import intersecting_faces, self_intersecting_pairs
 from posefix.rotations import kabsch
+from posefix.separation import separate, separating_axes
 from posefix.topology import grow_rings, vertex_adjacency
 
 REPLACED_PASS_THROUGH = 1
@@ -47,6 +52,10 @@ RIGID_REFERENCE = 8
 """Region replaced by the reference's shape moved rigidly onto it, to untangle new intersecting faces."""
 REPRODUCED = 16
 """Moved onto the target (constrained) or by the harmonic blend of the constrained residual (free)."""
+PUSHED = 32
+"""Unconstrained vertex pushed out of a contact that putting the constrained vertices on their targets makes."""
+SEPARATED = 64
+"""Moved apart from a face it newly intersects, along the axis that separates the two in the reference."""
 SMOOTHING_STEPS = (5, 20, 50)
 
 
@@ -188,7 +197,7 @@ def _untangle(state, V_ref, V_tgt, A, mask, rings, log):
     seeds[F[culprit].ravel()] = True
     links = np.stack([F[culprit[:, 0], 0], F[culprit[:, 1], 0]], axis=1)
     for region in _components(grow_rings(seeds, A, rings), A, links):
-        for flag, moved, positions in _remedies(state.X, V_tgt, V_ref, A, mask, region):
+        for flag, moved, positions in _remedies(state, V_tgt, V_ref, A, mask, region, culprit):
             trial = state.trial(moved, positions)
             ok = state.improves(trial)
             _log(log, f"new intersection, {rings} rings, {_REMEDY_NAMES[flag]}", moved, state, trial, ok)
@@ -198,15 +207,31 @@ def _untangle(state, V_ref, V_tgt, A, mask, rings, log):
     return True
 
 
-_REMEDY_NAMES = {REPLACED_NEW_INTERSECTION: "target", SMOOTHED: "smoothing", RIGID_REFERENCE: "rigid reference"}
+_REMEDY_NAMES = {SEPARATED: "separation", REPLACED_NEW_INTERSECTION: "target", SMOOTHED: "smoothing",
+                 RIGID_REFERENCE: "rigid reference"}
 
 
-def _remedies(X, V_tgt, V_ref, A, mask, region):
+def _remedies(state, V_tgt, V_ref, A, mask, region, culprit):
     """Candidate fixes of a region, in order: (flag, vertices moved, positions to take them from).
 
-    The last one copies from the target the whole unconstrained parts the region lies in (a
-    long unconstrained part such as a tail tip can be crumpled beyond any ring of the culprits).
+    The first moves only the vertices of the region's intersecting pairs, apart along the axis
+    that separates them in the reference (the smallest change: the rim of an intersection the
+    reference has that crept over an edge); the last copies from the target the whole
+    unconstrained parts the region lies in (a long unconstrained part such as a tail tip can be
+    crumpled beyond any ring of the culprits).
     """
+    X, F = state.X, state.F
+    inside = np.zeros(len(X), dtype=bool)
+    inside[region] = True
+    pairs = culprit[inside[F[culprit]].all(axis=(1, 2))]
+    if len(pairs):
+        edge = _mean_edge(X, F)
+        axes, _ = separating_axes(V_ref, F, pairs, X)
+        mobility = np.zeros(len(X))
+        mobility[F[pairs].ravel()] = 1.0
+        Y, feasible = separate(X, F, pairs, axes, mobility, SEPARATION_MARGIN_UNTANGLE * edge)
+        if feasible and np.linalg.norm(Y - X, axis=1).max() <= edge:
+            yield SEPARATED, np.flatnonzero((Y != X).any(axis=1)), Y
     yield REPLACED_NEW_INTERSECTION, region, V_tgt
     free = region[~mask[region]]
     for steps in SMOOTHING_STEPS if len(free) else ():
@@ -224,6 +249,14 @@ def _remedies(X, V_tgt, V_ref, A, mask, region):
         yield REPLACED_NEW_INTERSECTION, np.flatnonzero(grow_rings(parts, A, 1)), V_tgt
 
 
+SEPARATION_ROUNDS = 8
+"""Rounds of pushing unconstrained vertices out of contacts a snap adds (:func:`reproduce_targets`)."""
+SEPARATION_MARGIN = 0.05
+"""Gap left between a pushed face and its contact, in mean edge lengths."""
+SEPARATION_MARGIN_UNTANGLE = 0.01
+"""Gap left between faces moved apart to untangle a new intersection, in mean edge lengths."""
+SEPARATION_RINGS = 2
+"""Rings of unconstrained vertices over which a push fades out (biharmonic bump)."""
 BISECTIONS = 4
 """Bisection steps for the fraction of the correction a held-back part gets (:func:`reproduce_targets`)."""
 
@@ -234,7 +267,11 @@ def reproduce_targets(X, V_tgt, F, A, keep, hold, reference_faces, rings=2, atte
     The correction ``V_tgt - X`` on ``keep`` is extended to the other vertices by the uniform
     Laplacian (:func:`posefix.harmonic.harmonic_extension`), with zero correction on ``hold``.
     Where the corrected pose has intersecting faces that ``X`` does not (outside
-    ``reference_faces``), both faces of every such pair, grown by ``rings`` rings, are held back
+    ``reference_faces``), the movable (neither ``keep`` nor ``hold``) vertices of those pairs are
+    pushed out along the axis that separated the two faces before the snap
+    (:func:`posefix.separation.separate`, margin :data:`SEPARATION_MARGIN`), each push a
+    biharmonic bump over :data:`SEPARATION_RINGS` rings, for at most :data:`SEPARATION_ROUNDS`
+    rounds. For the pairs that still intersect, both faces, grown by ``rings`` rings, are held back
     (zero correction) and the blend is recomputed, at most ``attempts`` times; then ``X`` is
     returned unchanged. Each held-back part then gets the largest fraction of its correction
     that adds no intersecting face, found by :data:`BISECTIONS` bisection steps on [0, 1].
@@ -258,19 +295,41 @@ def reproduce_targets(X, V_tgt, F, A, keep, hold, reference_faces, rings=2, atte
     X : (n, 3) float
     moved : (n,) bool
         Vertices whose position changed.
+    pushed : (n,) bool
+        Unconstrained vertices pushed out of contacts (:mod:`posefix.separation`).
     """
     before = intersecting_faces(self_intersecting_pairs(X, F), len(F)) & ~reference_faces
+    push = np.zeros_like(X)  # offsets of unconstrained vertices pushed out of a contact
+    pushed = np.zeros(len(X), dtype=bool)
 
     def blend(weight, fixed):
-        """Pose with ``weight`` times the correction on ``keep``, and the new intersecting faces it adds."""
+        """Pose with ``weight`` times the correction on ``keep``, plus the pushes, and the faces it adds."""
         given = np.where(keep[:, None], weight[:, None] * (V_tgt - X), 0.0)
         Y = X + harmonic_extension(A, given, fixed)
+        if pushed.any():  # each push a smooth bump over the unconstrained vertices around it
+            Y += biharmonic_extension(A, push, pushed, grow_rings(pushed, A, SEPARATION_RINGS) & ~fixed)
         exact = keep & (weight == 1.0)
         Y[exact] = V_tgt[exact]  # bitwise, not up to rounding
         pairs = self_intersecting_pairs(Y, F)
         return Y, pairs, intersecting_faces(pairs, len(F)) & ~reference_faces & ~before
 
     weight = np.where(keep & ~hold, 1.0, 0.0)
+    mobility = (~keep & ~hold).astype(np.float64)
+    contacts = np.zeros((0, 2), dtype=np.int64)
+    for _ in range(SEPARATION_ROUNDS):
+        Y, pairs, added = blend(weight, keep | hold)
+        if not added.any():
+            break
+        contacts = np.unique(np.concatenate([contacts, pairs[added[pairs].any(axis=1)]]), axis=0)
+        Z, _ = separate(Y, F, contacts, _contact_axes(X, Y, F, contacts, mobility), mobility,
+                        SEPARATION_MARGIN * _mean_edge(X, F))
+        moved = (Z != Y).any(axis=1)
+        pushed |= moved
+        push[moved] += Z[moved] - Y[moved]
+    if pushed.any():
+        _log_info(log, "reproduction: %d unconstrained vertices pushed out of %d contacts (by up to %.2g mean edge "
+                  "lengths)", np.count_nonzero(pushed), len(contacts),
+                  np.linalg.norm(push, axis=1).max() / _mean_edge(X, F))
     held, conflict = hold.copy(), np.zeros(len(X), dtype=bool)
     for attempt in range(attempts):
         Y, pairs, added = blend(weight, keep | held)
@@ -279,11 +338,13 @@ def reproduce_targets(X, V_tgt, F, A, keep, hold, reference_faces, rings=2, atte
         conflict[F[pairs[added[pairs].any(axis=1)]].ravel()] = True
         held |= grow_rings(conflict, A, rings)
         weight[held] = 0.0
+        pushed &= ~held
+        push[held] = 0.0
         _log_info(log, "reproduction attempt %d adds %d intersecting faces: %d vertices held back",
                   attempt + 1, added.sum(), np.count_nonzero(held))
     else:
         _log_info(log, "reproduction abandoned after %d attempts", attempts)
-        return X.copy(), np.zeros(len(X), dtype=bool)
+        return X.copy(), np.zeros(len(X), dtype=bool), np.zeros(len(X), dtype=bool)
     near = grow_rings(conflict, A, 1)
     for part in _components(held & ~hold, A):
         fixed = keep | held
@@ -298,7 +359,24 @@ def reproduce_targets(X, V_tgt, F, A, keep, hold, reference_faces, rings=2, atte
     _log_info(log, "reproduction: %d constrained vertices put on their targets, %d partly (mean fraction %.2f), "
               "%d held back", np.count_nonzero(keep & (weight == 1.0)), np.count_nonzero(partly),
               weight[partly].mean() if partly.any() else 0.0, np.count_nonzero(keep & (weight == 0)))
-    return Y, (Y != X).any(axis=1)
+    return Y, (Y != X).any(axis=1), pushed
+
+
+def _contact_axes(X, Y, F, pairs, mobility):
+    """Separating axes for contacts added by a snap from ``X`` to ``Y``, (k, 3) float.
+
+    Taken from the pose with the fixed vertices where ``Y`` has them and the movable ones where
+    ``X`` has them, when the pair is separated there (the axis the movable side can be pushed
+    along); otherwise from ``X``.
+    """
+    axes, gaps = separating_axes(np.where(mobility[:, None] > 0, X, Y), F, pairs)
+    fallback_axes, _ = separating_axes(X, F, pairs)
+    axes[gaps <= 0] = fallback_axes[gaps <= 0]
+    return axes
+
+
+def _mean_edge(X, F):
+    return float(np.linalg.norm(X[F[:, 1]] - X[F[:, 0]], axis=1).mean())
 
 
 def _bisect(blend, weight, fixed, subset, low):
