@@ -112,8 +112,8 @@ def separate(Y, F, pairs, axes, mobility, margin, sweeps=50):
                 X[i[c]] -= a[c] * short * mobility[i[c]] / total[c]
         if worst == 0.0:
             break
-    gaps = np.einsum("ki,ki->k", a, X[j] - X[i]) - need
-    return X, bool(np.all(gaps[movable] >= -1e-12 * (1.0 + need[movable])) and movable.all())
+    short = need - np.einsum("ki,ki->k", a, X[j] - X[i])
+    return X, bool(np.all(short <= 1e-12 * (1.0 + need)))
 
 
 def _normal(T):

@@ -26,8 +26,8 @@ Two fallbacks replace regions of the repaired pose by the target's positions:
 them only up to its error, S0 §6 "Target shape reproduction") and blends the residual harmonically
 into the rest. Where a snapped surface would then cut an unconstrained one, the unconstrained
 vertices are pushed out along the axis that separated the two faces before the snap, each push a
-smooth (biharmonic) bump over a few rings; parts that still intersect go only as far as they can. Stage
-``verify`` runs it before the two fallbacks (constrained vertices it could not snap and that stay
+smooth (biharmonic) bump over a few rings; parts that still intersect go only as far as they
+can. Stage ``verify`` runs it before the two fallbacks (constrained vertices it could not snap and that stay
 far from their targets are the pass-through triggers) and once more after them.
 """
 
