@@ -4,17 +4,12 @@ import numpy as np
 import pytest
 
 from conftest import icosphere, shared_library
-from posefix.geometry import bbox_diagonal
+from posefix.geometry import bbox_diagonal, edge_lengths
 from posefix.intersections import intersecting_faces, self_intersecting_pairs
 from posefix.io import read_mesh
 from posefix.keyframes import deformation_gradients, keyframes
 from posefix.rotations import rotation_exp
 from posefix.topology import edges
-
-
-def _edge_lengths(V, F):
-    E = edges(F)
-    return np.linalg.norm(V[E[:, 0]] - V[E[:, 1]], axis=1)
 
 
 @pytest.mark.parametrize("align,unwrap", [(True, True), (False, False)])
@@ -48,10 +43,10 @@ def test_rigid_rotation_gives_rigid_frames(align):
     R = rotation_exp(np.array([[0.0, 0.0, np.pi / 2]]))[0]
     V_tgt = V @ R.T + [0.0, 2.0, 0.0]
     frames, t, _ = keyframes(V, V_tgt, F, 11, align=align)
-    ref_len = _edge_lengths(V, F)
+    ref_len = edge_lengths(V, edges(F))
     c0, c1 = V.mean(0), V_tgt.mean(0)
     for frame, ti in zip(frames, t):
-        assert np.allclose(_edge_lengths(frame, F), ref_len, rtol=1e-6, atol=0)
+        assert np.allclose(edge_lengths(frame, edges(F)), ref_len, rtol=1e-6, atol=0)
         # and it is the reference rotated by t * 90 degrees about z
         R_t = rotation_exp(np.array([[0.0, 0.0, ti * np.pi / 2]]))[0]
         expected = (V - c0) @ R_t.T

@@ -1,4 +1,4 @@
-"""Per-mesh geometric quantities: bounding-box diagonal, face normals and areas, vertex areas."""
+"""Per-mesh geometric quantities: bounding-box diagonal, edge lengths, face normals and areas, vertex areas."""
 
 import numpy as np
 
@@ -17,6 +17,11 @@ def bbox_diagonal(V):
         ``||max(V) - min(V)||`` in the units of ``V``.
     """
     return float(np.linalg.norm(V.max(axis=0) - V.min(axis=0)))
+
+
+def edge_lengths(V, E):
+    """Lengths of edges ``E`` (e, 2) int of vertices ``V`` (n, 3) float, (e,) float."""
+    return np.linalg.norm(V[E[:, 1]] - V[E[:, 0]], axis=1)
 
 
 def face_cross(V, F):

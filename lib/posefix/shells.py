@@ -25,7 +25,7 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.linalg import LinearOperator, cg, splu
 
-from posefix.geometry import face_areas
+from posefix.geometry import edge_lengths, face_areas
 from posefix.topology import edges
 
 STOP_REASONS = ("converged", "stall", "max_iters", "line-search failure", "collapsed triangle")
@@ -79,11 +79,6 @@ def mesh_hinges(F):
     first, second = first[keep], second[keep]
     hinges = np.stack([a[first], b[first], c[first], c[second]], axis=1)
     return Hinges(edges(F), hinges, np.stack([f[first], f[second]], axis=1))
-
-
-def edge_lengths(V, E):
-    """Lengths of edges ``E`` (e, 2) int of vertices ``V`` (n, 3) float, (e,) float."""
-    return np.linalg.norm(V[E[:, 1]] - V[E[:, 0]], axis=1)
 
 
 def dihedral_angles(V, H):

@@ -36,11 +36,12 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
 from posefix.classification import new_pairs
+from posefix.geometry import edge_lengths
 from posefix.harmonic import biharmonic_extension, harmonic_extension
 from posefix.intersections import intersecting_faces, self_intersecting_pairs
 from posefix.rotations import kabsch
 from posefix.separation import separate, separating_axes
-from posefix.topology import grow_rings, vertex_adjacency
+from posefix.topology import edges, grow_rings, vertex_adjacency
 
 REPLACED_PASS_THROUGH = 1
 """Replaced by the target: key frames pass through each other there and integration did not reach the target."""
@@ -225,7 +226,7 @@ def _remedies(state, V_tgt, V_ref, A, mask, region, culprit):
     inside[region] = True
     pairs = culprit[inside[F[culprit]].all(axis=(1, 2))]
     if len(pairs):
-        edge = _mean_edge(X, F)
+        edge = edge_lengths(X, edges(F)).mean()
         axes, _ = separating_axes(V_ref, F, pairs, X)
         mobility = np.zeros(len(X))
         mobility[F[pairs].ravel()] = 1.0
@@ -299,6 +300,7 @@ def reproduce_targets(X, V_tgt, F, A, keep, hold, reference_faces, rings=2, atte
         Unconstrained vertices pushed out of contacts (:mod:`posefix.separation`).
     """
     before = intersecting_faces(self_intersecting_pairs(X, F), len(F)) & ~reference_faces
+    edge = edge_lengths(X, edges(F)).mean()
     push = np.zeros_like(X)  # offsets of unconstrained vertices pushed out of a contact
     pushed = np.zeros(len(X), dtype=bool)
 
@@ -322,14 +324,14 @@ def reproduce_targets(X, V_tgt, F, A, keep, hold, reference_faces, rings=2, atte
             break
         contacts = np.unique(np.concatenate([contacts, pairs[added[pairs].any(axis=1)]]), axis=0)
         Z, _ = separate(Y, F, contacts, _contact_axes(X, Y, F, contacts, mobility), mobility,
-                        SEPARATION_MARGIN * _mean_edge(X, F))
+                        SEPARATION_MARGIN * edge)
         moved = (Z != Y).any(axis=1)
         pushed |= moved
         push[moved] += Z[moved] - Y[moved]
     if pushed.any():
         _log_info(log, "reproduction: %d unconstrained vertices pushed out of %d contacts (by up to %.2g mean edge "
                   "lengths)", np.count_nonzero(pushed), len(contacts),
-                  np.linalg.norm(push, axis=1).max() / _mean_edge(X, F))
+                  np.linalg.norm(push, axis=1).max() / edge)
     held, conflict = hold.copy(), np.zeros(len(X), dtype=bool)
     for attempt in range(attempts):
         Y, pairs, added = blend(weight, keep | held)
@@ -373,10 +375,6 @@ def _contact_axes(X, Y, F, pairs, mobility):
     fallback_axes, _ = separating_axes(X, F, pairs)
     axes[gaps <= 0] = fallback_axes[gaps <= 0]
     return axes
-
-
-def _mean_edge(X, F):
-    return float(np.linalg.norm(X[F[:, 1]] - X[F[:, 0]], axis=1).mean())
 
 
 def _bisect(blend, weight, fixed, subset, low):
