@@ -1,7 +1,7 @@
 """Benchmark: posefix's exact self-intersection detector against pymeshlab on the same key frames.
 
 For every key frame of every pose of a library (read from ``results/<library>/<pose>/keyframes.h5``),
-times ``posefix.intersections.self_intersecting_pairs`` and pymeshlab's
+times ``posefix.mesh.intersections.self_intersecting_pairs`` and pymeshlab's
 ``compute_selection_by_self_intersections_per_face`` (mesh construction included, best of
 ``--repeat`` runs each, one thread), and compares the flagged face counts. pymeshlab also flags
 some faces whose only intersection is with a face sharing a vertex, which posefix does not count.
@@ -12,7 +12,6 @@ some faces whose only intersection is with a face sharing a vertex, which posefi
 import argparse
 import json
 import platform
-import sys
 import time
 from pathlib import Path
 
@@ -21,9 +20,7 @@ import numpy as np
 import pymeshlab
 from threadpoolctl import threadpool_limits
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "lib"))
-
-from posefix.intersections import intersecting_faces, self_intersecting_pairs  # noqa: E402
+from posefix.mesh.intersections import intersecting_faces, self_intersecting_pairs
 
 
 def best_of(fn, repeat):

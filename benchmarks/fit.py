@@ -15,19 +15,16 @@ For every pose of a library (``results/<library>/<pose>/``, from the pipeline):
 
 import argparse
 import json
-import sys
 import time
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "lib"))
+import posefix  # noqa: F401  (runtime defaults before numpy)
+import h5py
+import numpy as np
+from scipy.interpolate import RBFInterpolator
+from threadpoolctl import threadpool_limits
 
-import posefix  # noqa: E402,F401
-import h5py  # noqa: E402
-import numpy as np  # noqa: E402
-from scipy.interpolate import RBFInterpolator  # noqa: E402
-from threadpoolctl import threadpool_limits  # noqa: E402
-
-from posefix.fit import FitSettings, iterate, start_fit  # noqa: E402
+from posefix.spacetime.fit import FitSettings, iterate, start_fit
 
 VARIANTS = (("fps", "blocked"), ("fps", "full"), ("worst", "blocked"))
 SIZES = (1000, 2000, 3000)

@@ -14,24 +14,21 @@ Key frames come from ``results/<library>/<pose>/keyframes.h5`` (run the pipeline
 import argparse
 import itertools
 import json
-import sys
 import time
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "lib"))
+import posefix  # noqa: F401  (runtime defaults before numpy)
+import h5py
+import numpy as np
 
-import posefix  # noqa: E402,F401
-import h5py  # noqa: E402
-import numpy as np  # noqa: E402
-
-from posefix.classification import constraint_mask  # noqa: E402
-from posefix.constraints import spacetime_constraints  # noqa: E402
-from posefix.contacts import contact_vertices  # noqa: E402
-from posefix.fit import FitSettings, iterate, start_fit  # noqa: E402
-from posefix.geometry import bbox_diagonal  # noqa: E402
-from posefix.integration import field_velocity, rk45  # noqa: E402
-from posefix.integration_cl import rk45_opencl, select_device  # noqa: E402
-from posefix.intersections import intersecting_faces, self_intersecting_pairs  # noqa: E402
+from posefix.mesh.contacts import contact_vertices
+from posefix.mesh.geometry import bbox_diagonal
+from posefix.mesh.intersections import intersecting_faces, self_intersecting_pairs
+from posefix.spacetime.classification import constraint_mask
+from posefix.spacetime.constraints import spacetime_constraints
+from posefix.spacetime.fit import FitSettings, iterate, start_fit
+from posefix.spacetime.integration import field_velocity, rk45
+from posefix.spacetime.integration_opencl import rk45_opencl, select_device
 
 BASE = {"tau": 0.1, "tangents": "spline", "samples": 12, "contact": 0.0, "max_centers": 4000, "eps_rel": 1e-4,
         "ring": 1, "batch": 128}
@@ -58,7 +55,7 @@ def run(results, pose, cfg, classify_cache):
         contacts = contact_vertices(frames, F, V_ref, cfg["contact"] * d, 0.1 * d) if cfg["contact"] > 0 else None
         classify_cache[key] = (constraint_mask(F, len(V_ref), pairs, ring=cfg["ring"], contacts=contacts)[0], pairs[0])
     mask, ref_pairs = classify_cache[key]
-    Y, V, _, _ = spacetime_constraints(frames, t, mask, cfg["samples"], cfg["tau"] * d, cfg["tangents"])
+    Y, V, _, _ = spacetime_constraints(frames, t, mask, cfg["samples"], tau=cfg["tau"] * d, tangents=cfg["tangents"])
     start = time.perf_counter()
     fit = start_fit(Y, V, FitSettings(eps=cfg["eps_rel"] * d, max_centers=cfg["max_centers"], batch=cfg["batch"]))
     reason = iterate(fit)

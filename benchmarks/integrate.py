@@ -16,21 +16,18 @@ next to it; turbo clocks and extra add pipes make it a poor bound).
 import argparse
 import json
 import os
-import sys
 import time
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "lib"))
+import posefix  # noqa: F401  (runtime defaults before numpy)
+import h5py
+import numpy as np
+import yaml
+from threadpoolctl import threadpool_limits
 
-import posefix  # noqa: E402,F401
-import h5py  # noqa: E402
-import numpy as np  # noqa: E402
-import yaml  # noqa: E402
-from threadpoolctl import threadpool_limits  # noqa: E402
-
-from posefix.integration import field_velocity, rk45  # noqa: E402
-from posefix.integration_cl import rk45_opencl, select_device  # noqa: E402
-from posefix.rbf import RBFField  # noqa: E402
+from posefix.spacetime.integration import field_velocity, rk45
+from posefix.spacetime.integration_opencl import rk45_opencl, select_device
+from posefix.spacetime.rbf import RBFField
 
 FLOPS_PER_EVALUATION = 50
 
@@ -116,7 +113,7 @@ def main():
         if i < args.numpy_poses:
             with threadpool_limits(2):
                 start = time.perf_counter()
-                b = rk45(field_velocity(field, tau), X0, cfg["rtol"], cfg["atol_rel"] * d, cfg["h0"],
+                b = rk45(field_velocity(field, tau), X0, atol=cfg["atol_rel"] * d, rtol=cfg["rtol"], h0=cfg["h0"],
                          sample_times=times)
                 np_s = time.perf_counter() - start
             rows[-1].update(numpy_seconds=np_s, speedup=np_s / cl_s,

@@ -20,14 +20,13 @@ import sys
 import time
 from pathlib import Path
 
+import numpy as np
+from matplotlib.figure import Figure
+from threadpoolctl import threadpool_info
+
+from posefix.report.tables import downstream_grid_markdown, downstream_markdown
+
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "lib"))
-
-import numpy as np  # noqa: E402
-from matplotlib.figure import Figure  # noqa: E402
-from threadpoolctl import threadpool_info  # noqa: E402
-
-from posefix.tables import downstream_grid_markdown, downstream_markdown  # noqa: E402
 
 DATA = Path(os.environ.get("POSEFIX_DATA", ROOT.parent / "shared" / "data"))
 LIBRARIES = ("lion-poses", "cat-poses", "horse-poses")
@@ -48,7 +47,7 @@ def machine():
         pass
     blas = ", ".join(sorted({f"{i.get('internal_api')} {i.get('version')} ({i.get('threading_layer', '-')})"
                              for i in threadpool_info() if i.get("user_api") == "blas"})) or "unknown"
-    from posefix.integration_cl import select_device
+    from posefix.spacetime.integration_opencl import select_device
     device, name = select_device("auto")
     return {"cpu": model, "cores": str(os.cpu_count()), "python": platform.python_version(),
             "numpy": np.__version__, "blas": blas, "opencl": name if device is not None else f"none ({name})"}

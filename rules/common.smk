@@ -1,4 +1,5 @@
-# Helpers of the Snakefile: config validation, the pose library, paths. No rules here.
+# Helpers of the rules: config validation, the pose library, paths, get_final_output(). No rules here.
+# posefix is installed in the interpreter that runs Snakemake (the venv's under `make run`).
 import shlex
 import sys
 from pathlib import Path
@@ -6,11 +7,11 @@ from pathlib import Path
 import yaml
 from snakemake.utils import validate
 
-sys.path.insert(0, str(Path(workflow.basedir) / "lib"))
-
-from posefix import synth  # noqa: E402
-from posefix.io import InputError, Library, discover_library, mesh_file  # noqa: E402
-
+from posefix.pipeline import demo
+from posefix.pipeline.errors import InputError
+from posefix.pipeline.library import Library, discover_library
+from posefix.pipeline.meshes import mesh_file
+from posefix.report.contents import POSE_FIGURES, TIMED_STAGES
 
 
 def _typed(value):
@@ -52,8 +53,8 @@ def _pose_list(value):
 
 def _demo_library():
     folder = config["demo"]["folder"]
-    reference = mesh_file(f"{folder}/{synth.REFERENCE_NAME}{synth.REFERENCE_SUFFIX}")
-    poses = [mesh_file(f"{folder}/{p.name}{p.suffix}") for p in synth.POSES]
+    reference = mesh_file(f"{folder}/{demo.REFERENCE_NAME}{demo.REFERENCE_SUFFIX}")
+    poses = [mesh_file(f"{folder}/{p.name}{p.suffix}") for p in demo.POSES]
     wanted = _pose_list(config["poses"])
     if wanted:
         unknown = sorted(set(wanted) - {p.name for p in poses})
@@ -128,24 +129,23 @@ def repaired_file(pose):
     return f"{RESULTS}/repaired/{pose}{LIBRARY.pose(pose).suffix}"
 
 
-# Report figures of one pose (stage render), each with its caption in rules/captions/<figure>.rst.
-FIGURES = ("renders", "deviation", "classification", "fit", "timings")
-FIGURE_LABELS = {
-    "renders": "target vs repaired",
-    "deviation": "deviation heat map",
-    "classification": "intersections per key frame, V_C",
-    "fit": "fit history",
-    "timings": "stage timings",
-}
-TIMED_STAGES = ("keyframes", "classify", "constraints", "fit", "integrate", "verify")
-
-
 def pose_figure(figure):
-    """The report() output of one figure of stage render (wildcard {pose})."""
+    """The report() output of one figure of stage render (wildcard {pose}), caption rules/captions/<figure>.rst."""
     return report(
         f"{REPORTS}/figures/{{pose}}/{figure}.png",
-        caption=f"rules/captions/{figure}.rst",
+        caption=f"captions/{figure}.rst",
         category="2. Poses",
         subcategory="{pose}",
-        labels={"pose": "{pose}", "figure": FIGURE_LABELS[figure]},
+        labels={"pose": "{pose}", "figure": POSE_FIGURES[figure]},
     )
+
+
+def get_final_output():
+    """The targets of the workflow: every repaired pose, the report figures, the summary and the overview."""
+    return [
+        *[repaired_file(p) for p in POSES],
+        *expand(f"{REPORTS}/figures/{{pose}}/{{figure}}.png", pose=POSES, figure=list(POSE_FIGURES)),
+        *expand(f"{REPORTS}/figures/{{pose}}/downstream.png", pose=POSES),
+        f"{REPORTS}/summary.json",
+        f"{REPORTS}/overview.png",
+    ]

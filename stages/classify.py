@@ -3,27 +3,23 @@
 Detects intersecting face pairs (exact predicates, pairs sharing a vertex not counted) in each
 key frame, optionally near contacts, and removes from V_C the vertices of intersecting faces plus
 ``--ring`` rings, contacts plus rings, and hand-picked vertices; vertices of faces that already
-intersect in the reference are added back (S0 §4.3). See ``posefix.classification``.
+intersect in the reference are added back (S0 §4.3). See ``posefix.spacetime.classification``.
 """
 
-import sys
-from pathlib import Path
+import time
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "lib"))
+import posefix  # noqa: F401  (runtime defaults before numpy)
+import numpy as np
 
-import posefix  # noqa: E402,F401  (runtime defaults before numpy)
-
-import time  # noqa: E402
-
-import numpy as np  # noqa: E402
-
-from posefix.classification import constraint_mask, new_pairs  # noqa: E402
-from posefix.cli import Timings, int_list, run_stage, stage_parser  # noqa: E402
-from posefix.contacts import contact_vertices  # noqa: E402
-from posefix.geometry import bbox_diagonal  # noqa: E402
-from posefix.h5io import read_artifact, write_artifact  # noqa: E402
-from posefix.intersections import intersecting_faces, self_intersecting_pairs  # noqa: E402
-from posefix.io import InputError, read_vertex_ids  # noqa: E402
+from posefix.mesh.contacts import contact_vertices
+from posefix.mesh.geometry import bbox_diagonal
+from posefix.mesh.intersections import intersecting_faces, new_pairs, self_intersecting_pairs
+from posefix.pipeline.artifacts import read_artifact, write_artifact
+from posefix.pipeline.cli import int_list, run_stage, stage_parser
+from posefix.pipeline.errors import InputError
+from posefix.pipeline.library import read_vertex_ids
+from posefix.pipeline.timings import Timings
+from posefix.spacetime.classification import constraint_mask
 
 DOCS = {
     "pairs": ("index", "intersecting face pairs (f < g) of all key frames, concatenated, (P, 2) int64"),
@@ -71,7 +67,7 @@ def main(args, log):
     if args.contact > 0:
         d = bbox_diagonal(V_ref)
         with timings.step("contacts", log):
-            contacts = contact_vertices(frames, F, V_ref, args.contact * d, args.contact_radius * d, log)
+            contacts = contact_vertices(frames, F, V_ref, args.contact * d, args.contact_radius * d)
     with timings.step("mask", log):
         mask, reasons = constraint_mask(F, n, frame_pairs, ring=args.ring, contacts=contacts, exclude=exclude)
     counts = np.array([intersecting_faces(p, len(F)).sum() for p in frame_pairs])

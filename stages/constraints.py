@@ -3,20 +3,17 @@
 Every vertex of V_C follows a C1 cubic trajectory through its key-frame positions (tangents by
 finite differences, S0, or of a per-vertex cubic spline); sampling it at t_i = i/s gives the
 space-time points y = (c(t_i), tau t_i) and tangents c'(t_i) the field must interpolate. See
-``posefix.constraints``.
+``posefix.spacetime.constraints``.
 """
 
-import sys
-from pathlib import Path
+import posefix  # noqa: F401  (runtime defaults before numpy)
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "lib"))
-
-import posefix  # noqa: E402,F401  (runtime defaults before numpy)
-from posefix.cli import Timings, run_stage, stage_parser  # noqa: E402
-from posefix.constraints import spacetime_constraints  # noqa: E402
-from posefix.geometry import bbox_diagonal  # noqa: E402
-from posefix.h5io import read_artifact, write_artifact  # noqa: E402
-from posefix.io import InputError  # noqa: E402
+from posefix.mesh.geometry import bbox_diagonal
+from posefix.pipeline.artifacts import read_artifact, write_artifact
+from posefix.pipeline.cli import run_stage, stage_parser
+from posefix.pipeline.errors import InputError
+from posefix.pipeline.timings import Timings
+from posefix.spacetime.constraints import spacetime_constraints
 
 DOCS = {
     "points": ("length", "space-time constraint points (c(t_i), tau t_i), (N, 4) float64"),
@@ -51,7 +48,7 @@ def main(args, log):
     d = bbox_diagonal(kf["reference"])
     with timings.step("sample", log):
         points, values, vertex, time = spacetime_constraints(kf["frames"], kf["t"], cl["mask"], args.samples,
-                                                             args.tau * d, args.tangents)
+                                                             tau=args.tau * d, tangents=args.tangents)
     log.info("%d constraints: %d vertices x %d times, tau = %.3g (%.3g d), %s tangents", len(points),
              cl["mask"].sum(), args.samples + 1, args.tau * d, args.tau, args.tangents)
     write_artifact(

@@ -5,17 +5,15 @@ own file format (.obj, .ply, .off.gz, .obj.gz) so that a demo run exercises ever
 Deterministic: the same seed gives byte-identical files.
 """
 
-import sys
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "lib"))
+import posefix  # noqa: F401  (runtime defaults before numpy)
 
-import posefix  # noqa: E402,F401  (runtime defaults before numpy)
-
-from posefix import synth  # noqa: E402
-from posefix.cli import Timings, run_stage, stage_parser  # noqa: E402
-from posefix.intersections import intersecting_faces, self_intersecting_pairs  # noqa: E402
-from posefix.io import write_mesh  # noqa: E402
+from posefix.mesh.intersections import intersecting_faces, self_intersecting_pairs
+from posefix.pipeline import demo
+from posefix.pipeline.cli import run_stage, stage_parser
+from posefix.pipeline.meshes import write_mesh
+from posefix.pipeline.timings import Timings
 
 
 def build_parser():
@@ -29,12 +27,12 @@ def build_parser():
 def main(args, log):
     timings = Timings()
     with timings.step("generate", log):
-        V_ref, F, poses = synth.demo_library(seed=args.seed, around=args.around)
+        V_ref, F, poses = demo.demo_library(seed=args.seed, around=args.around)
     log.info("demo limb: %d vertices, %d faces, %d poses", len(V_ref), len(F), len(poses))
     out = Path(args.out)
     with timings.step("write", log):
-        write_mesh(out / f"{synth.REFERENCE_NAME}{synth.REFERENCE_SUFFIX}", V_ref, F)
-        for pose in synth.POSES:
+        write_mesh(out / f"{demo.REFERENCE_NAME}{demo.REFERENCE_SUFFIX}", V_ref, F)
+        for pose in demo.POSES:
             V = poses[pose.name]
             hits = intersecting_faces(self_intersecting_pairs(V, F), len(F)).sum()
             write_mesh(out / f"{pose.name}{pose.suffix}", V, F)

@@ -2,20 +2,17 @@
 
 Same format and compression as the target file, identical faces and vertex order; for OBJ the
 target's text is kept line by line except for the vertex (and per-vertex normal) lines (see
-``posefix.io.write_like``).
+``posefix.pipeline.meshes.write_like``).
 """
 
-import sys
-from pathlib import Path
+import posefix  # noqa: F401  (runtime defaults before numpy)
+import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "lib"))
-
-import posefix  # noqa: E402,F401  (runtime defaults before numpy)
-import numpy as np  # noqa: E402
-
-from posefix.cli import Timings, run_stage, stage_parser  # noqa: E402
-from posefix.h5io import read_artifact  # noqa: E402
-from posefix.io import InputError, read_mesh, write_like  # noqa: E402
+from posefix.pipeline.artifacts import read_artifact
+from posefix.pipeline.cli import run_stage, stage_parser
+from posefix.pipeline.errors import InputError
+from posefix.pipeline.meshes import read_mesh, write_like
+from posefix.pipeline.timings import Timings
 
 
 def build_parser():

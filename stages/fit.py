@@ -4,25 +4,23 @@ Farthest-point greedy centre selection within the worst candidates, blocked Chol
 the null-space-projected system (or full LU refactorization), a condition estimate every
 iteration, and a crash-safe checkpoint after every iteration: rerunning after a kill, or with
 another stopping rule on the same constraints, continues from the stored factors and gives the
-same result as an uninterrupted fit. See ``posefix.fit`` and ``posefix.factorization``.
+same result as an uninterrupted fit. See ``posefix.spacetime.fit`` and ``posefix.spacetime.factorization``.
 """
 
-import sys
+import json
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "lib"))
+import posefix  # noqa: F401  (runtime defaults before numpy)
+import numpy as np
 
-import json  # noqa: E402
-
-import posefix  # noqa: E402,F401  (runtime defaults before numpy)
-import numpy as np  # noqa: E402
-
-from posefix import checkpoint  # noqa: E402
-from posefix.cli import Timings, run_stage, stage_parser  # noqa: E402
-from posefix.factorization import FactorizationError  # noqa: E402
-from posefix.fit import FitSettings, iterate, resume_fit, start_fit, truncate_history  # noqa: E402
-from posefix.h5io import config_hash, read_artifact, write_artifact  # noqa: E402
-from posefix.io import InputError, file_sha256  # noqa: E402
+from posefix.pipeline import checkpoint
+from posefix.pipeline.artifacts import config_hash, read_artifact, write_artifact
+from posefix.pipeline.cli import run_stage, stage_parser
+from posefix.pipeline.errors import InputError
+from posefix.pipeline.files import file_sha256
+from posefix.pipeline.timings import Timings
+from posefix.spacetime.factorization import FactorizationError
+from posefix.spacetime.fit import FitSettings, iterate, resume_fit, start_fit, truncate_history
 
 DOCS = {
     "centers": ("length", "RBF centres gamma_j in space-time, (n, 4) float64"),
@@ -101,7 +99,7 @@ def main(args, log):
         previous = checkpoint.save_iteration(folder, key, _settings_dict(settings), fit, previous)
 
     with timings.step("iterate", log):
-        reason = iterate(fit, on_iteration=on_iteration, log=log)
+        reason = iterate(fit, on_iteration=on_iteration)
     last = fit.history[-1]
     log.info("stopped (%s) at %d centres: max error %.3g d, rms %.3g d, max kappa %.3g", reason, fit.n,
              last["max_error"] / d, last["rms_error"] / d, max(r["condition"] for r in fit.history))

@@ -6,21 +6,17 @@ steps, on an OpenCL device (one work-item per vertex, float64) or, when none is 
 Steps land on the constraint sample times t_i = i/s, where positions are recorded.
 """
 
-import sys
-from pathlib import Path
+import os
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "lib"))
+import posefix  # noqa: F401  (runtime defaults before numpy)
+import numpy as np
 
-import os  # noqa: E402
-
-import posefix  # noqa: E402,F401  (runtime defaults before numpy)
-import numpy as np  # noqa: E402
-
-from posefix.cli import Timings, run_stage, stage_parser  # noqa: E402
-from posefix.h5io import read_artifact, write_artifact  # noqa: E402
-from posefix.integration import field_velocity, rk45  # noqa: E402
-from posefix.io import InputError  # noqa: E402
-from posefix.rbf import RBFField  # noqa: E402
+from posefix.pipeline.artifacts import read_artifact, write_artifact
+from posefix.pipeline.cli import run_stage, stage_parser
+from posefix.pipeline.errors import InputError
+from posefix.pipeline.timings import Timings
+from posefix.spacetime.integration import field_velocity, rk45
+from posefix.spacetime.rbf import RBFField
 
 DOCS = {
     "positions": ("length", "vertex positions at t = 1: the repaired pose before verification, (n, 3) float64"),
@@ -63,7 +59,7 @@ def main(args, log):
     X0 = kf["reference"]
     backend, device_name, device = "numpy", "numpy (CPU)", None
     if args.device != "numpy":
-        from posefix.integration_cl import select_device
+        from posefix.spacetime.integration_opencl import select_device
         device, text = select_device(args.device)
         if device is None:
             log.warning("WARNING: %s; integrating with the numpy backend instead (slower)", text)
@@ -73,12 +69,12 @@ def main(args, log):
              device_name, args.rtol, args.atol_rel)
     with timings.step("integrate", log):
         if device is not None:
-            from posefix.integration_cl import rk45_opencl
+            from posefix.spacetime.integration_opencl import rk45_opencl
             X1, samples, steps, rejected = rk45_opencl(device, field, tau, X0, times, args.rtol, args.atol_rel * d,
                                                        args.h0, vec=args.vec or None)
         else:
-            X1, samples, steps, rejected = rk45(field_velocity(field, tau), X0, args.rtol, args.atol_rel * d,
-                                                args.h0, sample_times=times)
+            X1, samples, steps, rejected = rk45(field_velocity(field, tau), X0, atol=args.atol_rel * d,
+                                                rtol=args.rtol, h0=args.h0, sample_times=times)
     log.info("steps per vertex: mean %.1f, max %d; rejected: %d in all", steps.mean(), steps.max(), rejected.sum())
     write_artifact(
         args.out, "integrate",

@@ -1,26 +1,22 @@
 """Stage keyframes: key frames from the reference to one target pose (S0 §4.1).
 
 Gradient-space interpolation (Xu et al. 2005) with global rigid alignment and rotation-branch
-unwrapping; see ``posefix.keyframes`` for the method. Writes ``keyframes.h5`` with the K frames at
+unwrapping; see ``posefix.spacetime.keyframes`` for the method. Writes ``keyframes.h5`` with the K frames at
 t = k/(K-1), the two input poses, and per-face rotation diagnostics.
 """
 
-import sys
+import argparse
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "lib"))
+import posefix  # noqa: F401  (runtime defaults before numpy)
+import numpy as np
 
-import posefix  # noqa: E402,F401  (runtime defaults before numpy)
-
-import argparse  # noqa: E402
-
-import numpy as np  # noqa: E402
-
-from posefix import keyframes as kf  # noqa: E402
-from posefix.cli import Timings, run_stage, stage_parser  # noqa: E402
-from posefix.geometry import bbox_diagonal  # noqa: E402
-from posefix.h5io import write_artifact  # noqa: E402
-from posefix.io import read_pose_pair  # noqa: E402
+from posefix.mesh.geometry import bbox_diagonal
+from posefix.pipeline.artifacts import write_artifact
+from posefix.pipeline.cli import run_stage, stage_parser
+from posefix.pipeline.library import read_pose_pair
+from posefix.pipeline.timings import Timings
+from posefix.spacetime import keyframes as kf
 
 DOCS = {
     "t": ("1", "key-frame times in [0, 1], (K,) float64"),

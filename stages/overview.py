@@ -5,19 +5,17 @@ the bar, centres and fallback vertices, seconds per stage, one column per pose) 
 ``summary.html`` (the summary table with a status per pose: ok, fallback, check).
 """
 
-import sys
+import json
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "lib"))
+import posefix  # noqa: F401  (runtime defaults before numpy)
 
-import json  # noqa: E402
-
-import posefix  # noqa: E402,F401  (runtime defaults before numpy)
-
-from posefix.cli import Timings, run_stage, stage_parser  # noqa: E402
-from posefix.figures import library_overview  # noqa: E402
-from posefix.io import InputError, atomic_write_bytes, write_figure  # noqa: E402
-from posefix.tables import DEVIATION_BAR, pose_status, summary_html  # noqa: E402
+from posefix.pipeline.cli import run_stage, stage_parser
+from posefix.pipeline.errors import InputError
+from posefix.pipeline.files import atomic_write_bytes, write_figure
+from posefix.pipeline.timings import Timings
+from posefix.report.figures import library_overview
+from posefix.report.tables import DEVIATION_BAR, pose_status, summary_html
 
 
 def build_parser():

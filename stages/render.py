@@ -5,28 +5,24 @@ Writes into ``--out``: ``renders.png`` (target vs repaired, intersecting faces h
 ``classification.png`` (intersecting faces per key frame before and after, ``V_C`` on the
 reference), ``fit.png`` (fit history: error, condition, seconds per iteration) and
 ``timings.png`` (wall seconds per stage from the Snakemake benchmark files). The camera is fixed by
-the reference (the same for every pose of a library). Figures are built in ``posefix.figures``.
+the reference (the same for every pose of a library). Figures are built in ``posefix.report.figures``.
 """
 
-import sys
+import json
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "lib"))
+import posefix  # noqa: F401  (runtime defaults before numpy)
 
-import json  # noqa: E402
+from posefix.mesh.intersections import intersecting_faces
+from posefix.pipeline.artifacts import read_artifact
+from posefix.pipeline.cli import run_stage, stage_parser
+from posefix.pipeline.files import write_figure
+from posefix.pipeline.timings import Timings, benchmark_seconds
+from posefix.report import figures
+from posefix.report.contents import POSE_FIGURES, TIMED_STAGES
+from posefix.report.rasterizer import camera
+from posefix.spacetime.classification import split_frames
 
-import posefix  # noqa: E402,F401  (runtime defaults before numpy)
-
-from posefix import figures  # noqa: E402
-from posefix.classification import split_frames  # noqa: E402
-from posefix.cli import Timings, run_stage, stage_parser  # noqa: E402
-from posefix.h5io import read_artifact  # noqa: E402
-from posefix.intersections import intersecting_faces  # noqa: E402
-from posefix.io import benchmark_seconds, write_figure  # noqa: E402
-from posefix.render import camera  # noqa: E402
-
-STAGES = ("keyframes", "classify", "constraints", "fit", "integrate", "verify")
-FIGURES = ("renders", "deviation", "classification", "fit", "timings")
 HISTORY = ("centers", "max_error", "rms_error", "condition", "seconds_evaluate", "seconds_select", "seconds_update")
 
 
@@ -67,12 +63,12 @@ def main(args, log):
         made["fit"] = figures.fit_history({k: fi[f"history/{k}"] for k in HISTORY},
                                           float(fattrs["metrics"]["bbox_diagonal"]),
                                           json.loads(fattrs["config"])["eps_rel"], title=args.pose)
-        made["timings"] = figures.timings({s: benchmark_seconds(args.benchmarks, s) for s in STAGES},
+        made["timings"] = figures.timings({s: benchmark_seconds(args.benchmarks, s) for s in TIMED_STAGES},
                                           title=args.pose)
     with timings.step("write", log):
-        for name in FIGURES:
+        for name in POSE_FIGURES:
             write_figure(Path(args.out) / f"{name}.png", made[name])
-    log.info("wrote %d figures into %s", len(FIGURES), args.out)
+    log.info("wrote %d figures into %s", len(POSE_FIGURES), args.out)
 
 
 if __name__ == "__main__":

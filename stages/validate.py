@@ -7,19 +7,15 @@ or face array that differs from the reference. Writes ``library.h5``: the refere
 a manifest (name, path, format, sha256) of every pose.
 """
 
-import sys
-from pathlib import Path
+import posefix  # noqa: F401  (runtime defaults before numpy)
+import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "lib"))
-
-import posefix  # noqa: E402,F401  (runtime defaults before numpy)
-
-import numpy as np  # noqa: E402
-
-from posefix.cli import Timings, run_stage, stage_parser  # noqa: E402
-from posefix.geometry import bbox_diagonal  # noqa: E402
-from posefix.h5io import write_artifact  # noqa: E402
-from posefix.io import discover_library, file_sha256, read_pose, read_reference  # noqa: E402
+from posefix.mesh.geometry import bbox_diagonal
+from posefix.pipeline.artifacts import write_artifact
+from posefix.pipeline.cli import run_stage, stage_parser
+from posefix.pipeline.files import file_sha256
+from posefix.pipeline.library import discover_library, read_pose, read_reference
+from posefix.pipeline.timings import Timings
 
 DOCS = {
     "reference/vertices": ("length", "reference vertex positions, (n, 3) float64"),

@@ -1,5 +1,6 @@
 """Shared fixtures: paths, the shared pose libraries (skipped when absent), small meshes, stage runner."""
 
+import io
 import os
 import subprocess
 import sys
@@ -28,6 +29,31 @@ def icosphere(subdivisions=2, radius=1.0, centre=(0.0, 0.0, 0.0)):
     return np.asarray(m.vertices) + np.asarray(centre), np.asarray(m.faces, dtype=np.int64)
 
 
+def grid_sheet(n, z):
+    """An n x n grid of the unit square at height z: (n*n, 3) float vertices, (2(n-1)^2, 3) int64 faces."""
+    g = np.linspace(0, 1, n)
+    V = np.column_stack([np.stack(np.meshgrid(g, g, indexing="ij"), -1).reshape(-1, 2), np.full(n * n, z)])
+    F = [[i * n + j, (i + 1) * n + j, (i + 1) * n + j + 1] for i in range(n - 1) for j in range(n - 1)]
+    F += [[i * n + j, (i + 1) * n + j + 1, i * n + j + 1] for i in range(n - 1) for j in range(n - 1)]
+    return V, np.array(F, dtype=np.int64)
+
+
+def smooth_field_problem(n=2000, seed=0):
+    """Space-time constraints of a smooth field: points (n, 4) in the unit box, values (n, 3)."""
+    rng = np.random.default_rng(seed)
+    Y = rng.uniform(0, 1, size=(n, 4))
+    V = np.stack([np.sin(Y @ [1.0, 0.5, 0.3, 0.2]), np.cos(Y @ [0.2, 0.7, 0.4, 0.1]), 0.2 * (Y ** 3).sum(1)], 1)
+    return Y, V
+
+
+def pixels(fig):
+    """The RGB pixels (h, w, 3) of a matplotlib figure drawn as PNG."""
+    from matplotlib.image import imread
+    buffer = io.BytesIO()
+    fig.savefig(buffer, format="png")
+    return imread(io.BytesIO(buffer.getvalue()))[..., :3]
+
+
 def run_stage(name, *args, check=True):
     """Run ``stages/<name>.py`` with this interpreter; returns the CompletedProcess."""
     proc = subprocess.run([sys.executable, str(ROOT / "stages" / f"{name}.py"), *map(str, args)],
@@ -54,7 +80,7 @@ def with_quick_downstream(args):
 @pytest.fixture(scope="session")
 def demo_run(tmp_path_factory):
     """The workflow on the demo library, run locally (``snakemake --cores 2``) once per session: the
-    folder it ran in. Read-only for its users (test_pipeline, and test_cluster's reference run)."""
+    folder it ran in. Read-only for its users (test_workflow, and test_cluster's reference run)."""
     work = tmp_path_factory.mktemp("demo-run")
     cmd = [sys.executable, "-m", "snakemake", "-s", str(ROOT / "Snakefile"), "--directory", str(work),
            *with_quick_downstream(["--cores", "2"])]
@@ -66,7 +92,7 @@ def demo_run(tmp_path_factory):
 @pytest.fixture(scope="session")
 def demo():
     """The demo library in memory: (V_ref, F, poses dict)."""
-    from posefix.synth import demo_library
+    from posefix.pipeline.demo import demo_library
     return demo_library()
 
 

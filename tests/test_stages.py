@@ -10,7 +10,7 @@ import pytest
 
 from conftest import ROOT, run_stage
 from posefix import __version__
-from posefix.h5io import config_hash, inputs_hash
+from posefix.pipeline.artifacts import config_hash, inputs_hash
 
 STAGES = ["demo", "validate", "keyframes", "classify", "constraints", "fit", "integrate", "verify", "export",
           "downstream", "summary", "render", "overview"]
@@ -87,7 +87,7 @@ def test_artifact_attributes_and_documentation(demo_artifacts, stage):
 
 
 def test_downstream_runs_every_setting_towards_both_examples(demo_artifacts):
-    from posefix.shells import STOP_REASONS
+    from posefix.check.gauss_newton import STOP_REASONS
     with h5py.File(demo_artifacts / "downstream.h5", "r") as fh:
         assert fh["alpha"][()].tolist() == [1.0] * 4 and fh["k_bend"][()].tolist() == [0.01, 0.01, 0.1, 0.1]
         assert fh["example"][()].tolist() == [0, 1, 0, 1]
@@ -169,7 +169,7 @@ def test_export_reproduces_the_target_file_but_the_vertex_lines(demo_artifacts, 
 
 def test_export_refuses_a_target_of_another_size(demo_artifacts, tmp_path):
     from conftest import icosphere
-    from posefix.io import write_mesh
+    from posefix.pipeline.meshes import write_mesh
     V, F = icosphere(1)
     write_mesh(tmp_path / "ball.obj", V, F)
     proc = run_stage("export", "--verify", demo_artifacts / "verify.h5", "--target", tmp_path / "ball.obj",

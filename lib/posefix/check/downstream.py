@@ -1,0 +1,125 @@
+"""The downstream check (S0 §5): does a Gauss–Newton discrete-shell solver converge better on the repaired pose?
+
+Example-driven deformation (Fröhlich & Botsch 2011) of the reference towards the original target
+and towards the repaired pose, over a grid of interpolation weights alpha and bending stiffnesses
+k_b (single settings are fragile). The same far-apart handle vertices are pinned at their linear
+blend in every run.
+"""
+
+import itertools
+import logging
+from dataclasses import dataclass
+
+import numpy as np
+
+from posefix.check.gauss_newton import STOP_REASONS, gauss_newton
+from posefix.check.shells import mesh_hinges, shell_energy
+
+log = logging.getLogger(__name__)
+
+EXAMPLES = ("original", "repaired")
+"""The two examples of the downstream check (S0 §5), in the order of downstream.h5's ``example`` codes."""
+
+
+def handle_vertices(V, count=3):
+    """``count`` far-apart vertices of ``V`` (n, 3) float by farthest-point sampling, (count,) int64.
+
+    Starts from the vertex farthest from the centroid; deterministic (ties: lowest index).
+    """
+    chosen = [int(np.argmax(np.linalg.norm(V - V.mean(axis=0), axis=1)))]
+    dist = np.linalg.norm(V - V[chosen[0]], axis=1)
+    while len(chosen) < count:
+        chosen.append(int(np.argmax(dist)))
+        dist = np.minimum(dist, np.linalg.norm(V - V[chosen[-1]], axis=1))
+    return np.array(chosen, dtype=np.int64)
+
+
+def deform_towards(V_ref, F, V_example, alpha, k_bend, k_stretch=1.0, handles=None, settings=None, hinges=None):
+    """Example-driven deformation of ``V_ref`` (n, 3) float towards ``alpha`` of ``V_example`` (n, 3).
+
+    Starts from the reference with the ``handles`` (default: three far-apart vertices,
+    :func:`handle_vertices`) pinned at their linear blend ``(1 - alpha) V_ref + alpha V_example``
+    and runs :func:`gauss_newton` on :func:`shell_energy`. Returns its :class:`SolveResult`.
+    """
+    h = handle_vertices(V_ref) if handles is None else np.asarray(handles)
+    energy = shell_energy(V_ref, F, V_example, alpha, k_bend, k_stretch, hinges)
+    pinned = (1.0 - alpha) * V_ref[h] + alpha * V_example[h]
+    return gauss_newton(energy, V_ref, h, pinned, F, settings)
+
+
+@dataclass
+class DownstreamCheck:
+    """The runs of :func:`downstream_check`: ``grid`` (alpha, k_b, example code) and a
+    :class:`~posefix.check.gauss_newton.SolveResult` per run, in the same order, and the ``handles``."""
+
+    grid: list
+    runs: list
+    handles: np.ndarray
+
+    def datasets(self):
+        """The arrays of ``downstream.h5`` (``docs/artifacts.md``), dict of str -> ndarray."""
+        grid, runs = self.grid, self.runs
+        return {
+            "alpha": np.array([g[0] for g in grid]), "k_bend": np.array([g[1] for g in grid]),
+            "example": np.array([g[2] for g in grid], dtype=np.uint8),
+            "iterations": np.array([r.iterations for r in runs], dtype=np.int64),
+            "converged": np.array([r.converged for r in runs]),
+            "reason": np.array([STOP_REASONS.index(r.reason) for r in runs], dtype=np.uint8),
+            "final_error": np.array([r.errors[-1] for r in runs]),
+            "gradient_reduction": np.array([r.gradient_reduction for r in runs]),
+            "min_area_ratio": np.array([r.min_area_ratio for r in runs]),
+            "seconds": np.array([r.seconds for r in runs]),
+            "errors": np.concatenate([r.errors for r in runs]),
+            "error_offsets": np.cumsum([0] + [len(r.errors) for r in runs]).astype(np.int64),
+            "handles": self.handles}
+
+    def metrics(self):
+        """Converged runs and iterations per example (``<example>_converged``, ``<example>_iterations``) and ``runs``."""
+        out = {}
+        for example, name in enumerate(EXAMPLES):
+            sel = [r for g, r in zip(self.grid, self.runs) if g[2] == example]
+            out[f"{name}_converged"] = int(sum(r.converged for r in sel))
+            out[f"{name}_iterations"] = int(sum(r.iterations for r in sel))
+        out["runs"] = len(self.grid)
+        return out
+
+    def curves(self):
+        """One dict per run for :func:`posefix.report.figures.downstream_history`."""
+        return [{"alpha": a, "k_bend": k, "example": EXAMPLES[e], "errors": r.errors, "converged": r.converged,
+                 "reason": r.reason} for (a, k, e), r in zip(self.grid, self.runs)]
+
+
+def downstream_check(V_ref, F, examples, alphas=(0.5, 1.0), k_bend=(1e-3, 1e-2, 1e-1), k_stretch=1.0,
+                     settings=None):
+    """Deform the reference towards every example over the grid alpha x k_b (S0 §5).
+
+    Parameters
+    ----------
+    V_ref : (n, 3) float
+    F : (m, 3) int
+    examples : dict of str -> (n, 3) float
+        The poses named in :data:`EXAMPLES` (``original``: the target, ``repaired``).
+    alphas, k_bend : sequence of float
+        Interpolation weights and bending stiffnesses of the grid.
+    k_stretch : float
+    settings : posefix.check.gauss_newton.SolverSettings, optional
+
+    Returns
+    -------
+    DownstreamCheck
+        Runs in the order alpha, then k_b, then example.
+    """
+    hinges, handles = mesh_hinges(F), handle_vertices(V_ref)
+    grid = list(itertools.product(alphas, k_bend, range(len(EXAMPLES))))
+    runs = []
+    for i, (alpha, kb, example) in enumerate(grid, 1):
+        res = deform_towards(V_ref, F, examples[EXAMPLES[example]], alpha, kb, k_stretch, handles, settings, hinges)
+        log.info("[%d/%d] alpha %g k_b %g %-8s: %3d iterations, %s, E %.3g (%.1f s)", i, len(grid), alpha, kb,
+                 EXAMPLES[example], res.iterations, res.reason, res.errors[-1], res.seconds)
+        runs.append(res)
+    check = DownstreamCheck(grid, runs, handles)
+    metrics = check.metrics()
+    for example, name in enumerate(EXAMPLES):
+        log.info("%s: converged in %d of %d runs, %d iterations in all", name, metrics[f"{name}_converged"],
+                 sum(g[2] == example for g in grid), metrics[f"{name}_iterations"])
+    return check

@@ -1,0 +1,178 @@
+"""Gauss–Newton with step halving for sums of squared residuals with a sparse Jacobian (:class:`posefix.check.shells.ShellEnergy`)."""
+
+import logging
+import time
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.sparse.linalg import LinearOperator, cg, splu
+
+from posefix.mesh.geometry import face_areas
+
+log = logging.getLogger(__name__)
+
+STOP_REASONS = ("converged", "stall", "max_iters", "line-search failure", "collapsed triangle")
+"""Why a run stopped, in the order of downstream.h5's ``reason`` codes."""
+
+
+@dataclass
+class SolveResult:
+    """Outcome of :func:`gauss_newton`.
+
+    ``V`` (n, 3) float final positions; ``errors`` (iterations + 1,) energy after every accepted
+    step (``errors[0]`` at the start); ``steps`` (iterations,) accepted step lengths; ``reason`` one
+    of ``STOP_REASONS``; ``gradient_reduction`` |J^T r| at the start over at the end;
+    ``min_area_ratio`` smallest face area over its rest area at the end.
+    """
+    V: np.ndarray
+    errors: np.ndarray
+    steps: np.ndarray
+    converged: bool
+    reason: str
+    gradient_reduction: float
+    min_area_ratio: float
+    seconds: float = 0.0
+
+    @property
+    def iterations(self):
+        return len(self.steps)
+
+
+@dataclass
+class SolverSettings:
+    """Stopping rules of :func:`gauss_newton` (see there); dimensionless."""
+    max_iters: int = 200        # Gauss-Newton iterations at most
+    rel_tol: float = 1e-6       # stop when (E_prev - E) / E_prev falls below this
+    energy_tol: float = 1e-16   # E at or below this is zero: converged
+    gradient_drop: float = 1e4  # converged: a full step accepted and |J^T r| reduced this much
+    min_step: float = 1e-10     # line search: halve from 1 down to this, then give up
+    stall_step: float = 1e-3    # an accepted step below this is a creeping step ...
+    stall_iters: int = 10       # ... and this many in a row stop the run as stalled
+    collapse: float = 1e-5      # a face below this fraction of its rest area has collapsed
+
+
+def gauss_newton(energy, V0, handles, handle_positions, F, settings=None):
+    """Minimize a :class:`ShellEnergy` by Gauss–Newton with step halving, handles fixed.
+
+    Each iteration solves J^T J d = -J^T r over the free coordinates (sparse LU with a
+    fill-reducing ordering of the symmetric matrix), then tries steps 1, 1/2, 1/4, ... and
+    accepts the first that lowers the energy. It stops when the energy is zero, when the
+    relative decrease falls below ``rel_tol``, when no step lowers it, after ``stall_iters``
+    creeping steps in a row, or after ``max_iters``.
+
+    "Converged" means it: the energy is zero (``energy_tol``), or the last step was a full one and
+    |J^T r| dropped by ``gradient_drop`` from the start. Anything else is not converged, with the
+    reason: "collapsed triangle" when a face ended below ``collapse`` of its rest area (the bending
+    gradient grows like 1 / area), otherwise "line-search failure", "max_iters" or "stall".
+
+    Parameters
+    ----------
+    energy : ShellEnergy
+    V0 : (n, 3) float
+        Start positions (the handles are moved to ``handle_positions`` first).
+    handles : (k,) int
+        Fixed vertices (k >= 3 not collinear removes the rigid motions).
+    handle_positions : (k, 3) float
+    F : (m, 3) int
+        Faces (for the collapse check).
+    settings : SolverSettings, optional
+        Default: :class:`SolverSettings` (one log line per iteration at debug level).
+
+    Returns
+    -------
+    SolveResult
+    """
+    s = settings or SolverSettings()
+    start = time.perf_counter()
+    V = np.array(V0, dtype=float)
+    V[handles] = handle_positions
+    free = np.ones(3 * energy.n, dtype=bool)
+    free[(3 * np.asarray(handles)[:, None] + np.arange(3)).reshape(-1)] = False
+    rest_area = face_areas(np.asarray(V0, dtype=float), F)
+    r = energy.residuals(V)
+    errors, steps = [float(r @ r)], []
+    g0 = g = None
+    reason, creeping = "max_iters", 0
+    normal = _NormalEquations()
+    for _ in range(s.max_iters + 1):
+        J = energy.jacobian(V)[:, free]
+        g = J.T @ r
+        if g0 is None:
+            g0 = g
+        if errors[-1] <= s.energy_tol:
+            reason = "converged"
+            break
+        if len(steps) == s.max_iters:
+            break
+        if not np.all(np.isfinite(J.data)):
+            reason = "collapsed triangle"
+            break
+        delta = normal.solve(J, g)
+        if delta is None:
+            reason = "line-search failure"
+            break
+        step, accepted = 1.0, None
+        while step >= s.min_step:
+            X = V.copy()
+            X.reshape(-1)[free] += step * delta
+            rx = energy.residuals(X)
+            ex = float(rx @ rx)
+            if ex < errors[-1]:
+                accepted = (X, rx, ex)
+                break
+            step *= 0.5
+        if accepted is None:
+            reason = "line-search failure"
+            break
+        V, r, ex = accepted
+        decrease = (errors[-1] - ex) / errors[-1]
+        errors.append(ex)
+        steps.append(step)
+        log.debug("GN %3d: E %.6e step %.3g", len(steps), ex, step)
+        creeping = creeping + 1 if step < s.stall_step else 0
+        if creeping >= s.stall_iters:
+            reason = "stall"
+            break
+        if decrease < s.rel_tol and ex > s.energy_tol:
+            J = energy.jacobian(V)[:, free]
+            g = J.T @ r
+            reason = "stall"
+            break
+    reduction = float(np.linalg.norm(g0) / max(np.linalg.norm(g), 1e-300))
+    if reason != "converged" and steps and steps[-1] == 1.0 and reduction >= s.gradient_drop:
+        reason = "converged"
+    ratio = float(np.min(face_areas(V, F) / np.maximum(rest_area, 1e-300)))
+    if reason != "converged" and ratio < s.collapse:
+        reason = "collapsed triangle"
+    return SolveResult(V, np.array(errors), np.array(steps), reason == "converged", reason, reduction, ratio,
+                       time.perf_counter() - start)
+
+
+class _NormalEquations:
+    """Solves J^T J d = -g for a sequence of nearby Jacobians.
+
+    Conjugate gradients preconditioned by the last sparse LU factorization (of an earlier, nearby
+    J^T J) to a relative residual of ``rtol``; a new factorization when that takes more than
+    ``max_cg`` iterations (or none exists yet). The steps are exact Gauss–Newton steps up to
+    ``rtol``; factorizations, the cost of an iteration, become rare near convergence.
+    """
+
+    def __init__(self, rtol=1e-10, max_cg=12):
+        self.rtol, self.max_cg, self.lu, self.factorizations = rtol, max_cg, None, 0
+
+    def solve(self, J, g):
+        """The step d, (k,) float; None when J^T J is singular."""
+        H = (J.T @ J).tocsc()
+        if self.lu is not None:
+            M = LinearOperator(H.shape, matvec=self.lu.solve, dtype=float)
+            d, info = cg(H, -g, rtol=self.rtol, atol=0.0, maxiter=self.max_cg, M=M)
+            if info == 0 and np.all(np.isfinite(d)):
+                return d
+        try:
+            self.lu = splu(H, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0, options={"SymmetricMode": True})
+        except RuntimeError:  # exactly singular
+            self.lu = None
+            return None
+        self.factorizations += 1
+        d = self.lu.solve(-g)
+        return d if np.all(np.isfinite(d)) else None

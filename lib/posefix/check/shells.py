@@ -1,0 +1,193 @@
+"""Discrete-shell energy of example-driven deformation (Fröhlich & Botsch 2011).
+
+S0 §5 ("Benefits for subsequent processing") checks repaired poses by how a downstream nonlinear
+solver behaves on them. The energy is a sum of squared residuals, one per edge for stretching and
+one per interior edge for bending:
+
+    r_l = w_l (l_e - l*_e),          w_l = sqrt(k_l / lbar_e^2)
+    r_b = w_b wrap(theta_e - theta*_e), w_b = sqrt(k_b lbar_e^2 / (A_1 + A_2))
+
+with l the edge length, theta the signed dihedral angle, lbar, A_1, A_2 the reference edge length
+and the areas of the edge's two triangles, and example-driven targets
+l* = l0 + alpha (l_pose - l0), theta* = theta0 + alpha wrap(theta_pose - theta0).
+
+Dihedral angle convention: for an interior edge (i, j) whose first face is (i, j, k) and second
+(j, i, l) (both counter-clockwise), theta = atan2(e_hat . (n1 x n2), n1 . n2) in (-pi, pi], with
+n1, n2 the faces' normals and e_hat = (x_j - x_i) / |x_j - x_i|: 0 when flat, positive when the
+surface bends away from its normals (convex), +-pi when folded onto itself. Differences of angles
+are wrapped to (-pi, pi] (``wrap_angle``), so a fold through +-pi costs its true angle, not 2 pi.
+"""
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.sparse as sp
+
+from posefix.mesh.geometry import edge_lengths, face_areas
+from posefix.mesh.topology import edges
+
+
+
+def wrap_angle(a):
+    """Angles (radians, any shape) mapped to (-pi, pi]."""
+    return np.pi - np.mod(np.pi - np.asarray(a, dtype=float), 2.0 * np.pi)
+
+
+@dataclass
+class Hinges:
+    """Edges of a triangle mesh with their stencils.
+
+    Attributes
+    ----------
+    edges : (e, 2) int64
+        Every undirected edge (stretching terms).
+    hinges : (h, 4) int64
+        Interior edges with exactly two faces as ``(i, j, k, l)``: faces ``(i, j, k)`` and
+        ``(j, i, l)`` in their own orientation (bending terms).
+    hinge_faces : (h, 2) int64
+        The two faces of every hinge.
+    """
+    edges: np.ndarray
+    hinges: np.ndarray
+    hinge_faces: np.ndarray
+
+
+def mesh_hinges(F):
+    """Edges and bending hinges of a triangle mesh, (m, 3) int faces -> :class:`Hinges`.
+
+    Boundary edges and edges of three or more faces get no bending term.
+    """
+    F = np.asarray(F, dtype=np.int64)
+    m = len(F)
+    a = F.reshape(-1)                      # directed half-edge a -> b of face f, opposite vertex c
+    b = F[:, [1, 2, 0]].reshape(-1)
+    c = F[:, [2, 0, 1]].reshape(-1)
+    f = np.repeat(np.arange(m), 3)
+    lo, hi = np.minimum(a, b), np.maximum(a, b)
+    order = np.lexsort((f, hi, lo))
+    lo, hi = lo[order], hi[order]
+    starts = np.flatnonzero(np.r_[True, (lo[1:] != lo[:-1]) | (hi[1:] != hi[:-1])])
+    counts = np.diff(np.r_[starts, len(lo)])
+    first = order[starts[counts == 2]]
+    second = order[starts[counts == 2] + 1]
+    keep = a[first] == b[second]           # consistently oriented pair: (i, j, k) and (j, i, l)
+    first, second = first[keep], second[keep]
+    hinges = np.stack([a[first], b[first], c[first], c[second]], axis=1)
+    return Hinges(edges(F), hinges, np.stack([f[first], f[second]], axis=1))
+
+
+def dihedral_angles(V, H):
+    """Signed dihedral angles of hinges ``H`` (h, 4) int (module convention), (h,) float in (-pi, pi]."""
+    xi, xj, xk, xl = (V[H[:, c]] for c in range(4))
+    e = xj - xi
+    n1 = np.cross(e, xk - xi)
+    n2 = np.cross(xi - xj, xl - xj)
+    e_hat = e / np.maximum(np.linalg.norm(e, axis=1), 1e-300)[:, None]
+    return np.arctan2(np.einsum("ij,ij->i", np.cross(n1, n2), e_hat), np.einsum("ij,ij->i", n1, n2))
+
+
+def dihedral_gradients(V, H):
+    """Gradients of the dihedral angles with respect to the hinge's four vertices.
+
+    Returns
+    -------
+    (h, 4, 3) float
+        d theta / d x for x_i, x_j, x_k, x_l (Bridson et al. 2003); they sum to zero. Infinite
+        for a zero-area face (the gradient grows like 1 / area).
+    """
+    xi, xj, xk, xl = (V[H[:, c]] for c in range(4))
+    e = xj - xi
+    le = np.linalg.norm(e, axis=1)
+    n1 = np.cross(e, xk - xi)
+    n2 = np.cross(xi - xj, xl - xj)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        u1 = n1 / np.einsum("ij,ij->i", n1, n1)[:, None]
+        u2 = n2 / np.einsum("ij,ij->i", n2, n2)[:, None]
+        gk = -le[:, None] * u1
+        gl = -le[:, None] * u2
+        tk = np.einsum("ij,ij->i", xk - xj, e) / le
+        tl = np.einsum("ij,ij->i", xl - xj, e) / le
+        sk = np.einsum("ij,ij->i", xk - xi, e) / le
+        sl = np.einsum("ij,ij->i", xl - xi, e) / le
+        gi = -(tk[:, None] * u1 + tl[:, None] * u2)
+        gj = sk[:, None] * u1 + sl[:, None] * u2
+    return np.stack([gi, gj, gk, gl], axis=1)
+
+
+@dataclass
+class ShellEnergy:
+    """The example-driven discrete-shell energy of one mesh and one example.
+
+    Build with :func:`shell_energy`. ``residuals(V)`` gives r (e + h,), ``jacobian(V)`` the sparse
+    d r / d vec(V) ((e + h, 3 n) CSR, column ``3 v + c`` for coordinate c of vertex v); the energy is
+    ``r . r`` (dimensionless).
+    """
+    hinges: Hinges
+    w_stretch: np.ndarray      # (e,) w_l
+    w_bend: np.ndarray         # (h,) w_b
+    length_target: np.ndarray  # (e,) l*
+    angle_target: np.ndarray   # (h,) theta*
+    n: int
+    _rows: np.ndarray = field(repr=False, default=None)
+    _cols: np.ndarray = field(repr=False, default=None)
+
+    def __post_init__(self):
+        E, H = self.hinges.edges, self.hinges.hinges
+        e, h = len(E), len(H)
+        rows_l = np.repeat(np.arange(e), 6)
+        cols_l = (3 * E[:, [0, 0, 0, 1, 1, 1]] + np.tile([0, 1, 2], 2)).reshape(-1)
+        rows_b = np.repeat(e + np.arange(h), 12)
+        cols_b = (3 * np.repeat(H, 3, axis=1) + np.tile([0, 1, 2], 4)).reshape(-1)
+        self._rows = np.r_[rows_l, rows_b]
+        self._cols = np.r_[cols_l, cols_b]
+
+    def residuals(self, V):
+        """Residuals r, (e + h,) float: stretching rows first, then bending rows."""
+        rl = self.w_stretch * (edge_lengths(V, self.hinges.edges) - self.length_target)
+        rb = self.w_bend * wrap_angle(dihedral_angles(V, self.hinges.hinges) - self.angle_target)
+        return np.r_[rl, rb]
+
+    def jacobian_values(self, V):
+        """Entries of the Jacobian in the fixed pattern (``jacobian`` builds the matrix from them)."""
+        E = self.hinges.edges
+        d = V[E[:, 1]] - V[E[:, 0]]
+        u = d / np.maximum(np.linalg.norm(d, axis=1), 1e-300)[:, None]
+        gl = self.w_stretch[:, None] * np.c_[-u, u]
+        gb = self.w_bend[:, None] * dihedral_gradients(V, self.hinges.hinges).reshape(len(self.w_bend), 12)
+        return np.r_[gl.reshape(-1), gb.reshape(-1)]
+
+    def jacobian(self, V):
+        """Sparse Jacobian d r / d vec(V), (e + h, 3 n) CSR."""
+        shape = (len(self.w_stretch) + len(self.w_bend), 3 * self.n)
+        return sp.csr_matrix((self.jacobian_values(V), (self._rows, self._cols)), shape=shape)
+
+    def energy(self, V):
+        """Energy sum r^2 at ``V`` (n, 3) float (dimensionless)."""
+        r = self.residuals(V)
+        return float(r @ r)
+
+
+def shell_energy(V_ref, F, V_example, alpha, k_bend, k_stretch=1.0, hinges=None):
+    """Example-driven shell energy: deform ``V_ref`` towards ``alpha`` of the way to ``V_example``.
+
+    Parameters
+    ----------
+    V_ref, V_example : (n, 3) float
+        Rest shape (weights, l0, theta0) and example pose (same faces).
+    F : (m, 3) int
+    alpha : float
+        Interpolation weight of the targets (0: the rest shape, 1: the example).
+    k_bend, k_stretch : float
+        Stiffness k_b of bending and k_l of stretching (dimensionless with the weights above).
+    hinges : Hinges, optional
+        ``mesh_hinges(F)``, when already computed.
+    """
+    H = mesh_hinges(F) if hinges is None else hinges
+    lbar = edge_lengths(V_ref, H.edges)
+    lbar_h = edge_lengths(V_ref, H.hinges[:, :2])
+    area = face_areas(V_ref, F)[H.hinge_faces].sum(axis=1)
+    theta0 = dihedral_angles(V_ref, H.hinges)
+    lengths = lbar + alpha * (edge_lengths(V_example, H.edges) - lbar)
+    angles = theta0 + alpha * wrap_angle(dihedral_angles(V_example, H.hinges) - theta0)
+    return ShellEnergy(H, np.sqrt(k_stretch) / lbar, np.sqrt(k_bend * lbar_h ** 2 / area), lengths, angles,
+                       len(V_ref))

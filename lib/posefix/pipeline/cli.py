@@ -1,0 +1,105 @@
+"""Plumbing shared by the stage scripts in ``stages/``: arguments, logging, errors, threads.
+
+A stage script defines ``main(args, log)`` and ends with ``run_stage(parser, main)``. Input
+problems (:class:`posefix.pipeline.errors.InputError`) end the stage with one line on stderr and
+exit code 2, file-system errors (``OSError``) with one line and exit code 1; an interrupted stage
+exits 130. Outputs are written atomically by the stages, so neither leaves a partial file behind.
+
+Logging is configured here, once per stage process, on the ``posefix`` logger: INFO and above on
+stderr, everything (DEBUG too) in the ``--log`` file. Library modules log through
+``logging.getLogger(__name__)`` and so reach both; the stage itself gets ``posefix.stages.<stage>``.
+"""
+
+import argparse
+import logging
+import sys
+import time
+
+from threadpoolctl import threadpool_limits
+
+from posefix.pipeline.errors import InputError
+
+EXIT_INPUT_ERROR = 2
+
+
+def stage_parser(stage, description):
+    """An ``argparse`` parser with the options every stage has: ``--threads``, ``--log``."""
+    parser = argparse.ArgumentParser(prog=f"{stage}.py", description=description,
+                                     formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    parser.set_defaults(stage=stage)
+    parser.add_argument("--threads", type=int, default=1,
+                        help="maximum BLAS/OpenMP/OpenCL threads this stage may use")
+    parser.add_argument("--log", default=None, help="also append the log to this file")
+    return parser
+
+
+def run_stage(parser, main, argv=None):
+    """Parse arguments, set up logging and thread limits, run ``main(args, log)``, map errors."""
+    args = parser.parse_args(argv)
+    log = configure_logging(args.stage, args.log)
+    start = time.perf_counter()
+    try:
+        with threadpool_limits(limits=max(1, args.threads)):
+            main(args, log)
+    except InputError as exc:
+        log.debug("input error", exc_info=True)
+        print(f"posefix {args.stage}: error: {exc}", file=sys.stderr)
+        sys.exit(EXIT_INPUT_ERROR)
+    except OSError as exc:  # e.g. an output folder that cannot be created or written
+        log.debug("system error", exc_info=True)
+        where = f"{exc.filename}: " if exc.filename else ""
+        print(f"posefix {args.stage}: error: {where}{exc.strerror or exc}", file=sys.stderr)
+        sys.exit(1)
+    except KeyboardInterrupt:
+        print(f"posefix {args.stage}: interrupted; no output written", file=sys.stderr)
+        sys.exit(130)
+    log.info("done in %.2f s", time.perf_counter() - start)
+
+
+def configure_logging(stage, path=None):
+    """Send the ``posefix`` loggers to stderr (INFO) and to ``path`` (DEBUG); the stage's own logger.
+
+    Parameters
+    ----------
+    stage : str
+        Stage name, in every line (``HH:MM:SS posefix <stage>: message``).
+    path : str, optional
+        Log file, rewritten.
+
+    Returns
+    -------
+    logging.Logger
+        ``posefix.stages.<stage>``.
+    """
+    root = logging.getLogger("posefix")
+    root.setLevel(logging.DEBUG)
+    root.handlers.clear()
+    root.propagate = False
+    fmt = logging.Formatter(f"%(asctime)s posefix {stage}: %(message)s", datefmt="%H:%M:%S")
+    console = logging.StreamHandler(sys.stderr)
+    console.setLevel(logging.INFO)
+    console.setFormatter(fmt)
+    root.addHandler(console)
+    if path:
+        handler = logging.FileHandler(path, mode="w")
+        handler.setLevel(logging.DEBUG)
+        handler.setFormatter(fmt)
+        root.addHandler(handler)
+    return logging.getLogger(f"posefix.stages.{stage}")
+
+
+def int_list(text):
+    """Parse ``"1,2, 3"`` into ``[1, 2, 3]`` (argparse type)."""
+    return _number_list(text, int, "integers")
+
+
+def float_list(text):
+    """Parse ``"0.5,1"`` into ``[0.5, 1.0]`` (argparse type)."""
+    return _number_list(text, float, "numbers")
+
+
+def _number_list(text, kind, name):
+    try:
+        return [kind(x) for x in text.replace(",", " ").split()]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a list of {name}: {text!r}") from None

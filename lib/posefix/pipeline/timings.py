@@ -1,0 +1,28 @@
+"""Wall seconds of stages: per sub-step while a stage runs, and per stage from Snakemake's benchmark files."""
+
+import csv
+import time
+from contextlib import contextmanager
+from pathlib import Path
+
+
+class Timings(dict):
+    """Wall seconds per named sub-step; ``with timings.step("solve", log): ...`` adds and logs one."""
+
+    @contextmanager
+    def step(self, name, log):
+        """Time the block, add its seconds to ``self[name]`` and log them (``log`` a ``logging.Logger``)."""
+        start = time.perf_counter()
+        yield
+        seconds = time.perf_counter() - start
+        self[name] = self.get(name, 0.0) + seconds
+        log.info("%s: %.3f s", name, seconds)
+
+
+def benchmark_seconds(folder, stage):
+    """Wall seconds from a Snakemake benchmark file ``folder/<stage>*.tsv`` (column ``s``), None when absent."""
+    files = sorted(Path(folder).glob(f"{stage}*.tsv"))
+    if not files:
+        return None
+    with open(files[0]) as fh:
+        return float(next(csv.DictReader(fh, delimiter="\t"))["s"])

@@ -1,0 +1,167 @@
+"""The repair of one integrated pose, as stage ``verify`` runs it: snap, fallback, snap again, verify.
+
+1. **Snap** (:mod:`posefix.repair.reproduce`): constrained vertices within ``reach`` of their
+   targets, ``reach = max(threshold, fallback_fit * fit max error)``, are put exactly on them;
+   the residual is blended into the rest. First, so that the fallback works on the corrected pose:
+   constrained vertices that could not be snapped (that would add intersections) and stay beyond
+   ``threshold = fallback_eps * eps`` trigger the pass-through fallback.
+2. **Fallback** (:mod:`posefix.repair.fallback`): pass-through regions copied from the target,
+   new intersections untangled.
+3. **Snap again**: what the fallback untangled may now be snapped.
+4. **Verify**: intersecting faces of the repaired pose, new ones (not in the reference), and the
+   deviation from the target over ``V_C`` and the rest.
+"""
+
+import logging
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from posefix.mesh.intersections import intersecting_faces, self_intersecting_pairs
+from posefix.repair.deviation import deviation
+from posefix.repair.fallback import fallback
+from posefix.repair.flags import PUSHED, REPRODUCED, flag_counts
+from posefix.repair.reproduce import reproduce_targets
+
+log = logging.getLogger(__name__)
+
+
+@dataclass(frozen=True)
+class RepairSettings:
+    """How a pose is repaired; the defaults are the pipeline's (config ``verify``).
+
+    Attributes
+    ----------
+    fallback_eps : float
+        Constrained vertices farther than ``fallback_eps * eps`` from their targets (after the
+        snap) did not reach them: pass-through triggers.
+    fallback_fit : float
+        Constrained vertices within ``max(that, fallback_fit * the fit's max error)`` of their
+        targets are snapped onto them.
+    ring : int
+        Rings grown around fallback triggers (and first tried around new intersections).
+    max_rings : int
+        Most rings tried around new intersections.
+    repair_new : bool
+        Untangle new intersections.
+    reproduce : bool
+        Snap; False keeps the integrated positions of ``V_C``.
+    """
+
+    fallback_eps: float = 100.0
+    fallback_fit: float = 2.0
+    ring: int = 1
+    max_rings: int = 6
+    repair_new: bool = True
+    reproduce: bool = True
+
+
+@dataclass
+class RepairResult:
+    """A repaired pose and what verify measured on it (shapes as in ``verify.h5``).
+
+    Attributes
+    ----------
+    X : (n, 3) float
+        Repaired positions.
+    replaced : (n,) uint8
+        Flags per vertex (:mod:`posefix.repair.flags`).
+    pairs : (P, 2) int64
+        Intersecting face pairs of the repaired pose.
+    faces, new : (m,) bool
+        Intersecting faces of the repaired pose, and those not intersecting in the reference.
+    deviation, integrated_deviation : (n,) float
+        ``|X - target| / d`` per vertex, after the repair and before it.
+    summary, integrated : dict
+        Their summaries (:func:`posefix.repair.deviation.deviation`).
+    seconds : dict
+        Wall seconds of ``reproduce`` (both snaps), ``fallback`` and ``verify``.
+    """
+
+    X: np.ndarray
+    replaced: np.ndarray
+    pairs: np.ndarray
+    faces: np.ndarray
+    new: np.ndarray
+    deviation: np.ndarray
+    integrated_deviation: np.ndarray
+    summary: dict
+    integrated: dict
+    seconds: dict
+
+    def metrics(self, problem):
+        """The scalar results of ``verify.h5`` (``docs/artifacts.md``), dict."""
+        m = len(problem.F)
+        return {"vertices": len(self.X), "faces": m,
+                "intersecting_faces_reference": int(problem.reference_faces.sum()),
+                "intersecting_faces_target": int(problem.target_faces.sum()),
+                "intersecting_faces_repaired": int(self.faces.sum()), "repaired_new": int(self.new.sum()),
+                "intersecting_faces_keyframes_max": int(max(intersecting_faces(p, m).sum()
+                                                            for p in problem.frame_pairs)),
+                **flag_counts(self.replaced, self.new, problem.F),
+                **{f"deviation_{k}": v for k, v in self.summary.items()},
+                **{f"integrated_deviation_{k}": v for k, v in self.integrated.items()}}
+
+
+def repair_pose(problem, X, d, eps, fit_max_error_rel, settings=RepairSettings()):
+    """Repair an integrated pose: snap, fallback, snap again, and verify the result.
+
+    Parameters
+    ----------
+    problem : posefix.repair.state.RepairProblem
+    X : (n, 3) float
+        Integrated positions.
+    d : float
+        The reference's bounding-box diagonal (deviations are relative to it).
+    eps : float
+        The fit's error threshold (length units).
+    fit_max_error_rel : float
+        The fit's max error at its end, relative to ``d``.
+    settings : RepairSettings
+
+    Returns
+    -------
+    RepairResult
+    """
+    threshold = settings.fallback_eps * eps  # farther: not reached (pass-through triggers)
+    reach = max(threshold, settings.fallback_fit * fit_max_error_rel * d)  # V_C: snap within
+    integrated_dev, integrated = deviation(X, problem.V_tgt, problem.mask, d)
+    t0 = time.perf_counter()
+    X, reproduced = _snap(problem, X, np.zeros(len(X), dtype=np.uint8), reach, settings)
+    t1 = time.perf_counter()
+    X, replaced, _ = fallback(problem, X, threshold, settings)
+    t2 = time.perf_counter()
+    X, replaced = _snap(problem, X, replaced, reach, settings)
+    replaced |= reproduced
+    t3 = time.perf_counter()
+    pairs = self_intersecting_pairs(X, problem.F)
+    faces = intersecting_faces(pairs, len(problem.F))
+    dev, summary = deviation(X, problem.V_tgt, problem.mask, d)
+    seconds = {"reproduce": (t1 - t0) + (t3 - t2), "fallback": t2 - t1, "verify": time.perf_counter() - t3}
+    result = RepairResult(X, replaced, pairs, faces, faces & ~problem.reference_faces, dev, integrated_dev,
+                          summary, integrated, seconds)
+    _log_result(result, problem)
+    return result
+
+
+def _snap(problem, X, replaced, reach, settings):
+    """Snap the constrained vertices within ``reach`` of their targets, outside fallback regions."""
+    if not settings.reproduce:
+        return X, replaced
+    reached = np.linalg.norm(X - problem.V_tgt, axis=1) <= reach
+    keep = problem.mask & reached & (replaced == 0)
+    X, moved, pushed = reproduce_targets(problem, X, keep, (replaced > 0) | (problem.mask & ~reached))
+    return X, replaced | (moved * np.uint8(REPRODUCED)) | (pushed * np.uint8(PUSHED))
+
+
+def _log_result(result, problem):
+    m, t = result.metrics(problem), result.seconds
+    log.info("reproduce %.3f s, fallback %.3f s, verify %.3f s", t["reproduce"], t["fallback"], t["verify"])
+    log.info("intersecting faces: reference %d, target %d, repaired %d (new %d); %d vertices changed by the fallback",
+             m["intersecting_faces_reference"], m["intersecting_faces_target"], m["intersecting_faces_repaired"],
+             m["repaired_new"], m["fallback_vertices"])
+    s, i = result.summary, result.integrated
+    log.info("deviation / d: constrained mean %.2e max %.2e, free mean %.2e max %.2e (integrated: %.2e, %.2e)",
+             s["constrained_mean"], s["constrained_max"], s["free_mean"], s["free_max"],
+             i["constrained_mean"], i["constrained_max"])

@@ -1,0 +1,116 @@
+"""The summary of a library: one entry per pose from its stages' metrics, as JSON and as Markdown.
+
+The entry schema is in ``docs/artifacts.md`` (``summary.json``). Stage ``summary`` reads the
+artifacts' metrics and Snakemake's benchmark files and calls :func:`pose_entry` per pose.
+"""
+
+import numpy as np
+
+from posefix.check.downstream import EXAMPLES
+from posefix.check.gauss_newton import STOP_REASONS
+from posefix.report.tables import downstream_markdown
+
+DEVIATIONS = ("constrained_max", "constrained_mean", "constrained_p95", "free_max", "free_mean", "free_p95")
+"""Deviation summaries of a pose (relative to the bbox diagonal)."""
+SUMMARY_STAGES = ("keyframes", "classify", "constraints", "fit", "integrate", "verify", "export", "downstream")
+"""Stages whose wall seconds a summary entry adds up (``seconds_stages``)."""
+
+
+def pose_entry(pose, metrics, downstream, seconds):
+    """The summary entry of one pose.
+
+    Parameters
+    ----------
+    pose : str
+    metrics : dict of str -> dict
+        The ``metrics`` of the pose's artifacts by stage (``keyframes``, ``constraints``, ``fit``,
+        ``integrate``, ``verify``).
+    downstream : dict of str -> ndarray
+        Datasets of ``downstream.h5`` (:func:`downstream_entry`).
+    seconds : dict of str -> float or None
+        Wall seconds per stage of :data:`SUMMARY_STAGES` (None where unknown).
+
+    Returns
+    -------
+    dict
+    """
+    kf, co, fi, it, ve = (metrics[s] for s in ("keyframes", "constraints", "fit", "integrate", "verify"))
+    return {
+        "pose": pose, "vertices": int(kf["vertices"]), "faces": int(kf["faces"]), "keyframes": int(kf["keyframes"]),
+        "intersecting_faces": {
+            "reference": int(ve["intersecting_faces_reference"]), "target": int(ve["intersecting_faces_target"]),
+            "repaired": int(ve["intersecting_faces_repaired"]), "repaired_new": int(ve["repaired_new"]),
+            "repaired_new_in_fallback": int(ve["repaired_new_in_fallback"]),
+            "keyframes_max": int(ve["intersecting_faces_keyframes_max"])},
+        "constraint_vertices": int(co["constraint_vertices"]), "constraints": int(co["constraints"]),
+        "fit": {"centers": int(fi["centers"]), "iterations": int(fi["iterations"]), "stop_reason": str(fi["stop_reason"]),
+                "max_error_rel": float(fi["max_error_rel"]), "rms_error_rel": float(fi["rms_error_rel"]),
+                "max_condition": float(fi["max_condition"]), "seconds": float(fi["seconds"])},
+        "integrate": {"backend": str(it["backend"]), "device": str(it["device"]), "seconds": float(it["seconds"]),
+                      "steps_mean": float(it["steps_mean"]), "steps_max": int(it["steps_max"])},
+        "deviation": {k: float(ve[f"deviation_{k}"]) for k in DEVIATIONS},
+        "integrated_deviation": {k: float(ve[f"integrated_deviation_{k}"]) for k in DEVIATIONS},
+        "fallback_vertices": int(ve["fallback_vertices"]),
+        "fallback": {"pass_through": int(ve["fallback_pass_through"]),
+                     "new_intersection": int(ve["fallback_new_intersection"]),
+                     "reproduced": int(ve["reproduced_vertices"]), "pushed": int(ve["pushed_vertices"])},
+        "downstream": downstream_entry(downstream),
+        "seconds_stages": seconds,
+        "seconds_total": sum(v for v in seconds.values() if v is not None),
+    }
+
+
+DOWNSTREAM_DATASETS = ("alpha", "k_bend", "example", "iterations", "converged", "reason", "final_error", "seconds")
+"""The datasets of ``downstream.h5`` that :func:`downstream_entry` reads."""
+
+
+def downstream_entry(d):
+    """``downstream`` of a summary entry: per alpha and example, lists over k_b.
+
+    Parameters
+    ----------
+    d : dict of str -> ndarray
+        :data:`DOWNSTREAM_DATASETS` of ``downstream.h5``.
+    """
+    entry = {"k_bend": sorted(set(d["k_bend"].tolist())), "alphas": {}, "seconds": float(d["seconds"].sum())}
+    for alpha in sorted(set(d["alpha"].tolist())):
+        per = entry["alphas"][f"{alpha:g}"] = {}
+        for example, name in enumerate(EXAMPLES):
+            runs = [i for i in np.flatnonzero((d["alpha"] == alpha) & (d["example"] == example))]
+            runs.sort(key=lambda i: d["k_bend"][i])
+            per[name] = {"iterations": [int(d["iterations"][i]) for i in runs],
+                         "converged": [bool(d["converged"][i]) for i in runs],
+                         "reason": [STOP_REASONS[d["reason"][i]] for i in runs],
+                         "final_error": [float(d["final_error"][i]) for i in runs]}
+    return entry
+
+
+def summary_markdown(library, entries):
+    """``summary.md`` of a library: one row per pose and the downstream table, str."""
+    head = ("| pose | faces | intersecting: reference / target / keyframes max / repaired | new (in fallback) | "
+            "V_C | centres | fit stop | max error / d | max kappa | fit s | integrate s | steps | "
+            "deviation V_C mean / max | (integrated) | free mean / max | fallback vertices | total s |")
+    lines = [f"# posefix summary: {library}", "", head,
+             "|---|---:|---|---|---:|---:|---|---:|---:|---:|---:|---:|---|---|---|---:|---:|"]
+    lines += [_markdown_row(e) for e in entries]
+    backends = sorted({f"{e['integrate']['backend']} ({e['integrate']['device']})" for e in entries})
+    lines += ["", f"Integration: {', '.join(backends)}. Deviations are relative to the reference's bbox diagonal; "
+              "'new' counts faces intersecting in the repaired pose but not in the reference, in brackets those "
+              "inside regions copied from the target (pass-through fallback, S0 Fig. 9); '(integrated)' is the "
+              "deviation of the integrated pose, before the fallback and the reproduction of V_C."]
+    lines += ["", "## Downstream check: Gauss-Newton discrete shells (S0 §5)", "",
+              *downstream_markdown(entries), "",
+              "Example-driven deformation (Froehlich & Botsch 2011) from the reference towards the original target and "
+              "towards the repaired pose, over the grid of alpha x k_b in config downstream; 'fewer': iteration "
+              "reduction over the settings where both converged."]
+    return "\n".join(lines) + "\n"
+
+
+def _markdown_row(e):
+    i, f, it, dv, di = e["intersecting_faces"], e["fit"], e["integrate"], e["deviation"], e["integrated_deviation"]
+    return (f"| {e['pose']} | {e['faces']} | {i['reference']} / {i['target']} / {i['keyframes_max']} / {i['repaired']} | "
+            f"{i['repaired_new']} ({i['repaired_new_in_fallback']}) | {e['constraint_vertices']} | {f['centers']} | "
+            f"{f['stop_reason']} | {f['max_error_rel']:.2g} | {f['max_condition']:.2g} | {f['seconds']:.1f} | "
+            f"{it['seconds']:.2f} | {it['steps_mean']:.1f} | {dv['constrained_mean']:.2g} / {dv['constrained_max']:.2g} | "
+            f"({di['constrained_mean']:.2g} / {di['constrained_max']:.2g}) | "
+            f"{dv['free_mean']:.2g} / {dv['free_max']:.2g} | {e['fallback_vertices']} | {e['seconds_total']:.1f} |")

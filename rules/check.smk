@@ -1,0 +1,35 @@
+# Per pose: the downstream Gauss-Newton discrete-shell check (S0 §5, posefix.check), parallel to
+# export and render, so it adds no level to the per-pose chain.
+
+rule downstream:
+    input:
+        keyframes=rules.keyframes.output[0],
+        verify=rules.verify.output[0],
+    output:
+        h5=f"{RESULTS}/{{pose}}/downstream.h5",
+        png=report(
+            f"{REPORTS}/figures/{{pose}}/downstream.png",
+            caption="captions/downstream.rst",
+            category="2. Poses",
+            subcategory="{pose}",
+            labels={"pose": "{pose}", "figure": "Gauss-Newton check"},
+        ),
+    params:
+        alphas=",".join(map(str, config["downstream"]["alphas"])),
+        k_bend=",".join(map(str, config["downstream"]["k_bend"])),
+        k_stretch=config["downstream"]["k_stretch"],
+        max_iters=config["downstream"]["max_iters"],
+        rel_tol=config["downstream"]["rel_tol"],
+        stall_iters=config["downstream"]["stall_iters"],
+        python=PYTHON,
+        script=stage_script("downstream"),
+    threads: config["downstream"]["threads"]
+    log:
+        f"{RESULTS}/logs/{{pose}}/downstream.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/{{pose}}/downstream.tsv"
+    shell:
+        "{params.python:q} {params.script:q} --keyframes {input.keyframes:q} --verify {input.verify:q}"
+        " --alphas {params.alphas} --k-bend {params.k_bend} --k-stretch {params.k_stretch}"
+        " --max-iters {params.max_iters} --rel-tol {params.rel_tol} --stall-iters {params.stall_iters}"
+        " --threads {threads} --out {output.h5:q} --png {output.png:q} --pose {wildcards.pose:q} --log {log:q}"

@@ -1,0 +1,74 @@
+# Reports: the summary of a library, the figures per pose and the overview (posefix.report). Captions
+# of the report() outputs are in rules/captions/.
+
+rule summary:
+    input:
+        verify=expand(f"{RESULTS}/{{pose}}/verify.h5", pose=POSES),
+        downstream=expand(f"{RESULTS}/{{pose}}/downstream.h5", pose=POSES),
+        meshes=[repaired_file(p) for p in POSES],
+    output:
+        json=f"{REPORTS}/summary.json",
+        md=f"{REPORTS}/summary.md",
+    params:
+        results=lambda wildcards, input: os.path.dirname(os.path.dirname(input.verify[0])),
+        poses=",".join(POSES),
+        python=PYTHON,
+        script=stage_script("summary"),
+    threads: 1
+    log:
+        f"{RESULTS}/logs/summary.log",
+    shell:
+        "{params.python:q} {params.script:q} --results {params.results:q} --poses {params.poses:q}"
+        " --out {output.json:q} --markdown {output.md:q} --log {log:q}"
+
+
+rule render:
+    input:
+        keyframes=rules.keyframes.output[0],
+        classify=rules.classify.output[0],
+        fit=rules.fit.output[0],
+        verify=rules.verify.output[0],
+        benchmarks=[f"{RESULTS}/benchmarks/{{pose}}/{stage}.tsv" for stage in TIMED_STAGES],
+    output:
+        [pose_figure(figure) for figure in POSE_FIGURES],
+    params:
+        folder=lambda wildcards, output: os.path.dirname(output[0]),
+        benchmarks=lambda wildcards, input: os.path.dirname(input.benchmarks[0]),
+        python=PYTHON,
+        script=stage_script("render"),
+    threads: 1
+    log:
+        f"{RESULTS}/logs/{{pose}}/render.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/{{pose}}/render.tsv"
+    shell:
+        "{params.python:q} {params.script:q} --keyframes {input.keyframes:q} --classify {input.classify:q}"
+        " --fit {input.fit:q} --verify {input.verify:q} --benchmarks {params.benchmarks:q}"
+        " --pose {wildcards.pose:q} --out {params.folder:q} --log {log:q}"
+
+
+rule overview:
+    input:
+        rules.summary.output.json,
+    output:
+        png=report(
+            f"{REPORTS}/overview.png",
+            caption="captions/overview.rst",
+            category="1. Library",
+            labels={"figure": "all poses at a glance"},
+        ),
+        html=report(
+            f"{REPORTS}/summary.html",
+            caption="captions/summary.rst",
+            category="1. Library",
+            labels={"figure": "summary table"},
+        ),
+    params:
+        python=PYTHON,
+        script=stage_script("overview"),
+    threads: 1
+    log:
+        f"{RESULTS}/logs/overview.log",
+    shell:
+        "{params.python:q} {params.script:q} --summary {input:q} --png {output.png:q} --html {output.html:q}"
+        " --log {log:q}"

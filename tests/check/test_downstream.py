@@ -1,0 +1,27 @@
+"""The downstream check: handles, and the grid of runs towards both examples."""
+
+import numpy as np
+import pytest
+
+from test_gauss_newton import _bend, _strip
+from posefix.check.downstream import EXAMPLES, downstream_check, handle_vertices
+
+
+def test_handles_are_far_apart_and_deterministic():
+    V, F = _strip()
+    h = handle_vertices(V)
+    assert len(set(h.tolist())) == 3 and h.tolist() == handle_vertices(V).tolist()
+    assert np.linalg.norm(V[h[0]] - V[h[1]]) == pytest.approx(np.linalg.norm(V.max(0) - V.min(0)))
+
+
+def test_grid_runs_every_setting_towards_both_examples_in_order():
+    V, F = _strip()
+    examples = {"original": _bend(V, 1.0, at=3.0), "repaired": _bend(V, 0.5, at=3.0)}
+    check = downstream_check(V, F, examples, alphas=(1.0,), k_bend=(1e-2, 1e-1))
+    assert check.grid == [(1.0, 1e-2, 0), (1.0, 1e-2, 1), (1.0, 1e-1, 0), (1.0, 1e-1, 1)]
+    data, metrics = check.datasets(), check.metrics()
+    assert data["converged"].all() and metrics["runs"] == 4 and EXAMPLES == ("original", "repaired")
+    assert metrics["original_converged"] == metrics["repaired_converged"] == 2
+    assert np.array_equal(np.diff(data["error_offsets"]), data["iterations"] + 1)
+    assert metrics["original_iterations"] == data["iterations"][data["example"] == 0].sum()
+    assert [c["example"] for c in check.curves()] == ["original", "repaired"] * 2

@@ -1,0 +1,29 @@
+"""Near contacts: close but geodesically distant surfaces."""
+
+import numpy as np
+
+from conftest import icosphere
+from posefix.mesh.contacts import contact_vertices
+from posefix.spacetime.classification import EXCLUDED_CONTACT, constraint_mask
+
+
+def test_contacts_flag_close_distant_surfaces_only():
+    # two parallel unit spheres' caps: a sphere and a copy 2.05 apart along x nearly touch
+    V1, F1 = icosphere(3)
+    V2, F2 = icosphere(3, centre=(2.05, 0.0, 0.0))
+    V, F = np.vstack([V1, V2]), np.vstack([F1, F2 + len(V1)])
+    far = V.copy()
+    far[len(V1):] += [3.0, 0.0, 0.0]
+    frames = np.stack([far, V])  # reference far apart, then close
+    contacts = contact_vertices(frames, F, far, distance=0.1, radius=0.5)
+    assert not contacts[0].any()
+    close = np.flatnonzero(contacts[1])
+    assert len(close) > 0
+    gap = np.where(np.arange(len(V)) < len(V1), 1.025 - V[:, 0], V[:, 0] - 1.025)
+    assert np.all(gap[close] < 0.1 + 0.03)  # only vertices near the gap plane x = 1.025
+    # within one sphere nothing is in contact: its own surface is geodesically near or far away
+    alone = contact_vertices(V1[None], F1, V1, distance=0.1, radius=0.5)
+    assert not alone.any()
+    mask, reasons = constraint_mask(F, len(V), [np.zeros((0, 2), int)] * 2, ring=1, contacts=contacts)
+    assert np.array_equal(reasons & EXCLUDED_CONTACT > 0, contacts[1])
+    assert not mask[close].any()

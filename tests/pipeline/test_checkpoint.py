@@ -1,0 +1,25 @@
+"""Fit checkpoints: crash-safe commits, another key or a half-written iteration is ignored."""
+
+import numpy as np
+
+from conftest import smooth_field_problem
+from posefix.pipeline import checkpoint
+from posefix.spacetime.fit import FitSettings, iterate, start_fit
+
+
+def test_checkpoint_ignores_another_key_and_a_half_written_iteration(tmp_path):
+    Y, V = smooth_field_problem(600)
+    fit = start_fit(Y, V, FitSettings(eps=0.0, max_centers=200, batch=64))
+    previous = None
+
+    def save(fit, record):
+        nonlocal previous
+        previous = checkpoint.save_iteration(tmp_path, "k1", {}, fit, previous)
+
+    iterate(fit, on_iteration=save)
+    (tmp_path / "iter-00009.npz.tmp").write_bytes(b"half")  # a write interrupted by a kill
+    state, history = checkpoint.load(tmp_path, "k1")
+    assert len(history) == len(fit.history) and np.array_equal(state["order"], fit.order)
+    assert checkpoint.load(tmp_path, "other") == (None, [])
+    (tmp_path / "iter-00001.npz").unlink()
+    assert checkpoint.load(tmp_path, "k1") == (None, [])

@@ -1,0 +1,48 @@
+"""Stage command lines: common options, number lists, logging to stderr and the log file, exit codes."""
+
+import argparse
+import logging
+
+import pytest
+
+from posefix.pipeline.cli import configure_logging, float_list, int_list, run_stage, stage_parser
+from posefix.pipeline.errors import InputError
+
+
+def test_number_lists():
+    assert int_list("1,2, 3") == [1, 2, 3] and float_list("0.5 1") == [0.5, 1.0]
+    with pytest.raises(argparse.ArgumentTypeError, match="not a list of integers"):
+        int_list("1,x")
+
+
+def test_library_loggers_reach_the_stage_log_file(tmp_path, capsys):
+    log = configure_logging("demo", tmp_path / "demo.log")
+    logging.getLogger("posefix.repair.sequence").info("from the library")
+    logging.getLogger("posefix.check.gauss_newton").debug("detail")
+    log.info("from the stage")
+    for handler in logging.getLogger("posefix").handlers:
+        handler.flush()
+    text = (tmp_path / "demo.log").read_text()
+    assert "posefix demo: from the library" in text and "posefix demo: detail" in text
+    err = capsys.readouterr().err
+    assert "from the stage" in err and "detail" not in err  # DEBUG only in the file
+    assert log.name == "posefix.stages.demo"
+
+
+def _run(main, argv=()):
+    parser = stage_parser("demo", "a test stage")
+    with pytest.raises(SystemExit) as exit_info:
+        run_stage(parser, main, list(argv))
+    return exit_info.value.code
+
+
+def test_errors_become_one_line_and_an_exit_code(capsys):
+    def bad_input(args, log):
+        raise InputError("a.obj", "no faces")
+
+    def no_disk(args, log):
+        raise OSError(28, "No space left on device", "out.h5")
+
+    assert _run(bad_input) == 2 and capsys.readouterr().err.strip().endswith("posefix demo: error: a.obj: no faces")
+    assert _run(no_disk) == 1 and "error: out.h5: No space left on device" in capsys.readouterr().err
+    assert stage_parser("demo", "").parse_args([]).threads == 1

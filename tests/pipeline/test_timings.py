@@ -1,0 +1,21 @@
+"""Stage timings: sub-steps add up and are logged; Snakemake benchmark files are read."""
+
+import logging
+
+from posefix.pipeline.timings import Timings, benchmark_seconds
+
+
+def test_steps_add_up_under_their_name_and_are_logged(caplog):
+    timings = Timings()
+    log = logging.getLogger("posefix.stages.test")
+    with caplog.at_level(logging.INFO, logger="posefix.stages.test"):
+        for _ in range(2):
+            with timings.step("solve", log):
+                pass
+    assert list(timings) == ["solve"] and timings["solve"] >= 0
+    assert [r.getMessage().split(":")[0] for r in caplog.records] == ["solve", "solve"]
+
+
+def test_benchmark_seconds(tmp_path):
+    (tmp_path / "fit.tsv").write_text("s\th:m:s\tmax_rss\n12.5\t0:00:12\t100\n")
+    assert benchmark_seconds(tmp_path, "fit") == 12.5 and benchmark_seconds(tmp_path, "verify") is None

@@ -1,0 +1,131 @@
+"""Defaults in one place: config.yaml equals the schema's defaults, the stages' and the library's.
+
+config.yaml (validated by schemas/config.schema.yaml) is the source. Every tunable a stage takes has
+the same argparse default, and every library function or settings class that takes it has the
+same default, or none where the library works in other units (lengths in the input's units, where
+the config is relative to the bbox diagonal).
+"""
+
+import dataclasses
+import importlib.util
+import inspect
+
+import pytest
+import yaml
+
+from conftest import ROOT
+from posefix.check.downstream import deform_towards, downstream_check
+from posefix.check.gauss_newton import SolverSettings
+from posefix.check.shells import shell_energy
+from posefix.mesh.contacts import contact_vertices
+from posefix.pipeline.demo import demo_library
+from posefix.repair.sequence import RepairSettings
+from posefix.spacetime.classification import constraint_mask
+from posefix.spacetime.constraints import knot_tangents, spacetime_constraints
+from posefix.spacetime.fit import FitSettings
+from posefix.spacetime.integration import rk45
+from posefix.spacetime.integration_opencl import rk45_opencl
+from posefix.spacetime.keyframes import keyframes, prepare
+
+CONFIG = yaml.safe_load((ROOT / "config.yaml").read_text())
+SCHEMA = yaml.safe_load((ROOT / "schemas" / "config.schema.yaml").read_text())
+NONE = inspect.Parameter.empty
+
+
+def default(owner, name):
+    """Default of parameter ``name`` of a function, or of field ``name`` of a dataclass (NONE if it has none)."""
+    if dataclasses.is_dataclass(owner):
+        field = {f.name: f for f in dataclasses.fields(owner)}[name]
+        return NONE if field.default is dataclasses.MISSING else field.default
+    return inspect.signature(owner).parameters[name].default
+
+
+# (section, key) -> where the library takes the same value: [(function or dataclass, parameter, convert)]
+LIBRARY = {
+    ("demo", "seed"): [(demo_library, "seed", None)],
+    ("demo", "around"): [(demo_library, "around", None)],
+    ("keyframes", "count"): [(keyframes, "count", None)],
+    ("keyframes", "align"): [(keyframes, "align", None), (prepare, "align", None)],
+    ("keyframes", "unwrap"): [(keyframes, "unwrap", None), (prepare, "unwrap", None)],
+    ("classify", "ring"): [(constraint_mask, "ring", None)],
+    ("constraints", "samples"): [(spacetime_constraints, "samples", None)],
+    ("constraints", "tangents"): [(spacetime_constraints, "tangents", None), (knot_tangents, "method", None)],
+    ("fit", "eps_rms_rel"): [(FitSettings, "eps_rms", None)],  # 0: off, in any unit
+    ("fit", "max_centers"): [(FitSettings, "max_centers", None)],
+    ("fit", "candidates"): [(FitSettings, "candidates", None)],
+    ("fit", "batch"): [(FitSettings, "batch", None)],
+    ("fit", "selection"): [(FitSettings, "selection", None)],
+    ("fit", "update"): [(FitSettings, "update", None)],
+    ("fit", "memory_gb"): [(FitSettings, "memory_bytes", lambda b: b / 1e9)],
+    ("integrate", "rtol"): [(rk45, "rtol", None)],
+    ("integrate", "h0"): [(rk45, "h0", None), (rk45_opencl, "h0", None)],
+    ("integrate", "vec"): [(rk45_opencl, "vec", lambda v: v or 0)],  # None and 0: the device's width
+    **{("verify", f.name): [(RepairSettings, f.name, None)] for f in dataclasses.fields(RepairSettings)},
+    ("downstream", "alphas"): [(downstream_check, "alphas", list)],
+    ("downstream", "k_bend"): [(downstream_check, "k_bend", list)],
+    ("downstream", "k_stretch"): [(downstream_check, "k_stretch", None), (deform_towards, "k_stretch", None),
+                                  (shell_energy, "k_stretch", None)],
+    ("downstream", "max_iters"): [(SolverSettings, "max_iters", None)],
+    ("downstream", "rel_tol"): [(SolverSettings, "rel_tol", None)],
+    ("downstream", "stall_iters"): [(SolverSettings, "stall_iters", None)],
+}
+# relative to the bbox diagonal in the config, lengths in the library: the library has no default
+RELATIVE = {
+    ("classify", "contact"): [(contact_vertices, "distance")],
+    ("classify", "contact_radius"): [(contact_vertices, "radius")],
+    ("constraints", "tau"): [(spacetime_constraints, "tau")],
+    ("fit", "eps_rel"): [(FitSettings, "eps")],
+    ("integrate", "atol_rel"): [(rk45, "atol"), (rk45_opencl, "atol")],
+}
+WORKFLOW_ONLY = {("demo", "folder"), ("classify", "exclude"), ("integrate", "device")} | {
+    (section, "threads") for section, value in CONFIG.items() if isinstance(value, dict) and "threads" in value}
+"""Keys of the workflow (paths, per-pose inputs, rule threads) or of a stage only (the OpenCL device choice)."""
+
+
+def tunables():
+    return [(s, k) for s, section in CONFIG.items() if isinstance(section, dict) for k in section]
+
+
+def _stage_parser(stage):
+    spec = importlib.util.spec_from_file_location(f"stage_{stage}", ROOT / "stages" / f"{stage}.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module.build_parser()
+
+
+def test_config_yaml_holds_exactly_the_schemas_keys_with_its_defaults():
+    props = SCHEMA["properties"]
+    assert set(CONFIG) == set(props)
+    for key, prop in props.items():
+        if prop.get("type") == "object" and "properties" in prop:
+            assert set(CONFIG[key]) == set(prop["properties"]), key
+            for sub, spec in prop["properties"].items():
+                assert CONFIG[key][sub] == spec["default"], f"{key}.{sub}"
+        else:
+            assert CONFIG[key] == prop["default"], key
+
+
+def test_every_tunable_is_accounted_for():
+    assert set(tunables()) == set(LIBRARY) | set(RELATIVE) | WORKFLOW_ONLY
+
+
+@pytest.mark.parametrize("section", sorted({s for s, _ in tunables()}))
+def test_stage_defaults_equal_the_config(section):
+    parser = _stage_parser(section)
+    for s, key in tunables():
+        if s == section and (s, key) not in WORKFLOW_ONLY - {("integrate", "device")}:
+            assert parser.get_default(key) == CONFIG[s][key], f"stages/{section}.py --{key.replace('_', '-')}"
+
+
+@pytest.mark.parametrize("key", sorted(LIBRARY), ids="{0[0]}.{0[1]}".format)
+def test_library_defaults_equal_the_config(key):
+    for owner, name, convert in LIBRARY[key]:
+        value = default(owner, name)
+        assert value is not NONE, f"{owner.__name__}({name}) has no default"
+        assert (convert or (lambda v: v))(value) == CONFIG[key[0]][key[1]], f"{owner.__name__}({name}={value!r})"
+
+
+@pytest.mark.parametrize("key", sorted(RELATIVE), ids="{0[0]}.{0[1]}".format)
+def test_relative_tunables_have_no_library_default(key):
+    for owner, name in RELATIVE[key]:
+        assert default(owner, name) is NONE, f"{owner.__name__}({name}) has a default in other units"

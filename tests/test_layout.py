@@ -1,0 +1,85 @@
+"""The package layout: a mesh kernel that knows no method, no cycles, no stage imports, short repair functions."""
+
+import ast
+import subprocess
+import sys
+
+from conftest import ROOT
+
+LIB = ROOT / "lib" / "posefix"
+
+
+def _module(path):
+    rel = path.relative_to(LIB.parent).with_suffix("")
+    parts = list(rel.parts)
+    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+
+
+def import_graph():
+    """Every module of posefix -> the modules it imports (posefix's by full name, others by their name)."""
+    modules = {_module(p): p for p in LIB.rglob("*.py")}
+    graph = {}
+    for name, path in sorted(modules.items()):
+        targets = set()
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.Import):
+                targets |= {a.name for a in node.names}
+            elif isinstance(node, ast.ImportFrom):
+                assert node.level == 0, f"{name}: relative import"
+                targets.add(node.module)
+                targets |= {f"{node.module}.{a.name}" for a in node.names if f"{node.module}.{a.name}" in modules}
+        graph[name] = targets - {name}
+    return graph
+
+
+def test_the_mesh_kernel_imports_nothing_else_of_posefix_in_a_fresh_interpreter():
+    mesh = sorted(_module(p) for p in (LIB / "mesh").glob("*.py"))
+    code = ("import sys; " + "; ".join(f"import {m}" for m in mesh)
+            + "; print(' '.join(sorted(m for m in sys.modules if m.startswith('posefix'))))")
+    loaded = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.split()
+    assert set(mesh) <= set(loaded) and all(m in ("posefix", "posefix.mesh") or m.startswith("posefix.mesh.")
+                                            for m in loaded), loaded
+
+
+def test_no_module_imports_a_method_from_the_kernel_or_the_stages():
+    graph = import_graph()
+    for name, targets in graph.items():
+        own = {t for t in targets if t.split(".")[0] == "posefix"}
+        if name.startswith("posefix.mesh"):
+            assert all(t == "posefix" or t.startswith("posefix.mesh") for t in own), (name, own)
+        assert not any(t.split(".")[0] in ("stages", "benchmarks", "conftest") for t in targets), name
+
+
+def test_the_import_graph_has_no_cycles():
+    graph = import_graph()
+    graph = {m: {t for t in targets if t in graph} for m, targets in graph.items()}
+    state = {}
+
+    def visit(m, path):
+        state[m] = "open"
+        for t in sorted(graph[m]):
+            assert state.get(t) != "open", "cycle: " + " -> ".join(path + [t])
+            if t not in state:
+                visit(t, path + [t])
+        state[m] = "done"
+
+    for m in sorted(graph):
+        if m not in state:
+            visit(m, [m])
+
+
+def test_repair_functions_are_short_with_few_parameters():
+    for path in sorted((LIB / "repair").glob("*.py")):
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+                args = node.args
+                count = len(args.posonlyargs) + len(args.args) + len(args.kwonlyargs) + bool(args.vararg) + bool(args.kwarg)
+                count -= bool(args.args) and args.args[0].arg in ("self", "cls")
+                where = f"{path.name}:{node.lineno} {node.name}"
+                assert node.end_lineno - node.lineno + 1 <= 50, f"{where}: {node.end_lineno - node.lineno + 1} lines"
+                assert count <= 8, f"{where}: {count} parameters"
+
+
+def test_stages_do_not_manipulate_sys_path():
+    for path in sorted((ROOT / "stages").glob("*.py")) + sorted((ROOT / "rules").glob("*.smk")):
+        assert "sys.path" not in path.read_text(), path.name
