@@ -15,7 +15,7 @@ from posefix.mesh.contacts import contact_vertices
 from posefix.mesh.geometry import bbox_diagonal
 from posefix.mesh.intersections import intersecting_faces, new_pairs, self_intersecting_pairs
 from posefix.pipeline.artifacts import read_artifact, write_artifact
-from posefix.pipeline.cli import int_list, run_stage, stage_parser
+from posefix.pipeline.cli import int_list, library_defaults, run_stage, stage_parser
 from posefix.pipeline.errors import InputError
 from posefix.pipeline.library import read_vertex_ids
 from posefix.pipeline.timings import Timings
@@ -37,7 +37,8 @@ def build_parser():
     parser = stage_parser("classify", __doc__)
     parser.add_argument("--keyframes", required=True, help="keyframes.h5 of the pose")
     parser.add_argument("--out", required=True, help="classify.h5 to write")
-    parser.add_argument("--ring", type=int, default=1, help="rings removed around intersecting vertices")
+    parser.add_argument("--ring", type=int, default=library_defaults(constraint_mask)["ring"],
+                        help="rings removed around intersecting vertices")
     parser.add_argument("--contact", type=float, default=0.02,
                         help="near-contact distance relative to the bbox diagonal (0 = off)")
     parser.add_argument("--contact-radius", type=float, default=0.1,
@@ -51,13 +52,13 @@ def main(args, log):
     timings = Timings()
     if args.ring < 0 or args.contact < 0 or args.contact_radius <= 0:
         raise InputError("arguments", "--ring and --contact must be >= 0, --contact-radius > 0")
-    with timings.step("read", log):
+    with timings.step("read"):
         data, _ = read_artifact(args.keyframes, "keyframes", ["frames", "faces", "reference"])
     frames, F, V_ref = data["frames"], data["faces"], data["reference"]
     n, K = len(V_ref), len(frames)
     exclude = _exclusions(args, n)
     frame_pairs = []
-    with timings.step("intersections", log):
+    with timings.step("intersections"):
         for k, V in enumerate(frames):
             start = time.perf_counter()
             frame_pairs.append(self_intersecting_pairs(V, F))
@@ -66,9 +67,9 @@ def main(args, log):
     contacts = None
     if args.contact > 0:
         d = bbox_diagonal(V_ref)
-        with timings.step("contacts", log):
+        with timings.step("contacts"):
             contacts = contact_vertices(frames, F, V_ref, args.contact * d, args.contact_radius * d)
-    with timings.step("mask", log):
+    with timings.step("mask"):
         mask, reasons = constraint_mask(F, n, frame_pairs, ring=args.ring, contacts=contacts, exclude=exclude)
     counts = np.array([intersecting_faces(p, len(F)).sum() for p in frame_pairs])
     new = np.array([intersecting_faces(new_pairs(p, frame_pairs[0]), len(F)).sum() for p in frame_pairs])

@@ -10,7 +10,7 @@ import posefix  # noqa: F401  (runtime defaults before numpy)
 
 from posefix.mesh.geometry import bbox_diagonal
 from posefix.pipeline.artifacts import read_artifact, write_artifact
-from posefix.pipeline.cli import run_stage, stage_parser
+from posefix.pipeline.cli import library_defaults, run_stage, stage_parser
 from posefix.pipeline.errors import InputError
 from posefix.pipeline.timings import Timings
 from posefix.spacetime.constraints import spacetime_constraints
@@ -28,10 +28,11 @@ def build_parser():
     parser.add_argument("--keyframes", required=True, help="keyframes.h5 of the pose")
     parser.add_argument("--classify", required=True, help="classify.h5 of the pose (V_C)")
     parser.add_argument("--out", required=True, help="constraints.h5 to write")
-    parser.add_argument("--samples", type=int, default=12, help="s: constraints at t_i = i/s, i = 0..s")
+    defaults = library_defaults(spacetime_constraints)
+    parser.add_argument("--samples", type=int, default=defaults["samples"], help="s: constraints at t_i = i/s, i = 0..s")
     parser.add_argument("--tau", type=float, default=0.3,
                         help="time-axis scale relative to the reference's bbox diagonal")
-    parser.add_argument("--tangents", choices=("hermite", "spline"), default="spline",
+    parser.add_argument("--tangents", choices=("hermite", "spline"), default=defaults["tangents"],
                         help="knot tangents: finite differences (S0) or per-vertex cubic spline")
     return parser
 
@@ -40,13 +41,13 @@ def main(args, log):
     if args.samples < 2 or args.tau <= 0:
         raise InputError("arguments", "--samples must be >= 2 and --tau > 0")
     timings = Timings()
-    with timings.step("read", log):
+    with timings.step("read"):
         kf, _ = read_artifact(args.keyframes, "keyframes", ["frames", "t", "reference"])
         cl, _ = read_artifact(args.classify, "classify", ["mask"])
     if cl["mask"].shape[0] != kf["reference"].shape[0]:
         raise InputError(args.classify, "V_C mask does not match the key frames' vertex count")
     d = bbox_diagonal(kf["reference"])
-    with timings.step("sample", log):
+    with timings.step("sample"):
         points, values, vertex, time = spacetime_constraints(kf["frames"], kf["t"], cl["mask"], args.samples,
                                                              tau=args.tau * d, tangents=args.tangents)
     log.info("%d constraints: %d vertices x %d times, tau = %.3g (%.3g d), %s tangents", len(points),

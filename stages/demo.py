@@ -11,7 +11,7 @@ import posefix  # noqa: F401  (runtime defaults before numpy)
 
 from posefix.mesh.intersections import intersecting_faces, self_intersecting_pairs
 from posefix.pipeline import demo
-from posefix.pipeline.cli import run_stage, stage_parser
+from posefix.pipeline.cli import library_defaults, run_stage, stage_parser
 from posefix.pipeline.meshes import write_mesh
 from posefix.pipeline.timings import Timings
 
@@ -19,18 +19,19 @@ from posefix.pipeline.timings import Timings
 def build_parser():
     parser = stage_parser("demo", __doc__)
     parser.add_argument("--out", required=True, help="folder to write the library into")
-    parser.add_argument("--seed", type=int, default=7, help="seed of the bump pattern")
-    parser.add_argument("--around", type=int, default=40, help="vertices per ring of the capsule")
+    defaults = library_defaults(demo.demo_library)
+    parser.add_argument("--seed", type=int, default=defaults["seed"], help="seed of the bump pattern")
+    parser.add_argument("--around", type=int, default=defaults["around"], help="vertices per ring of the capsule")
     return parser
 
 
 def main(args, log):
     timings = Timings()
-    with timings.step("generate", log):
+    with timings.step("generate"):
         V_ref, F, poses = demo.demo_library(seed=args.seed, around=args.around)
     log.info("demo limb: %d vertices, %d faces, %d poses", len(V_ref), len(F), len(poses))
     out = Path(args.out)
-    with timings.step("write", log):
+    with timings.step("write"):
         write_mesh(out / f"{demo.REFERENCE_NAME}{demo.REFERENCE_SUFFIX}", V_ref, F)
         for pose in demo.POSES:
             V = poses[pose.name]

@@ -8,14 +8,12 @@ run. Writes per-run iterations, convergence, stop reason and the error after eve
 (``--png``) a figure of the energy per iteration (``posefix.report.figures.downstream_history``).
 """
 
-import inspect
-
 import posefix  # noqa: F401  (runtime defaults before numpy)
 
 from posefix.check.downstream import downstream_check
 from posefix.check.gauss_newton import STOP_REASONS, SolverSettings
 from posefix.pipeline.artifacts import read_artifact, write_artifact
-from posefix.pipeline.cli import float_list, run_stage, stage_parser
+from posefix.pipeline.cli import float_list, library_defaults, run_stage, stage_parser
 from posefix.pipeline.files import write_figure
 from posefix.pipeline.timings import Timings
 from posefix.report import figures
@@ -39,18 +37,18 @@ DOCS = {
 
 def build_parser():
     parser = stage_parser("downstream", __doc__)
-    grid = inspect.signature(downstream_check).parameters
+    grid = library_defaults(downstream_check)
     defaults = SolverSettings()
     parser.add_argument("--keyframes", required=True, help="keyframes.h5 of the pose (reference, target, faces)")
     parser.add_argument("--verify", required=True, help="verify.h5 of the pose (repaired positions)")
     parser.add_argument("--out", required=True, help="downstream.h5 to write")
     parser.add_argument("--png", default=None, help="also draw the energy per iteration of every run into this PNG")
     parser.add_argument("--pose", default="", help="pose name (figure title)")
-    parser.add_argument("--alphas", type=float_list, default=list(grid["alphas"].default),
+    parser.add_argument("--alphas", type=float_list, default=list(grid["alphas"]),
                         help="interpolation weights, e.g. 0.5,1.0")
-    parser.add_argument("--k-bend", type=float_list, default=list(grid["k_bend"].default),
+    parser.add_argument("--k-bend", type=float_list, default=list(grid["k_bend"]),
                         help="bending stiffnesses k_b")
-    parser.add_argument("--k-stretch", type=float, default=grid["k_stretch"].default, help="stretching stiffness k_l")
+    parser.add_argument("--k-stretch", type=float, default=grid["k_stretch"], help="stretching stiffness k_l")
     parser.add_argument("--max-iters", type=int, default=defaults.max_iters, help="Gauss-Newton iterations at most")
     parser.add_argument("--rel-tol", type=float, default=defaults.rel_tol,
                         help="stop when the relative decrease of the energy falls below this")
@@ -61,11 +59,11 @@ def build_parser():
 
 def main(args, log):
     timings = Timings()
-    with timings.step("read", log):
+    with timings.step("read"):
         kf, _ = read_artifact(args.keyframes, "keyframes", ["reference", "target", "faces"])
         ve, _ = read_artifact(args.verify, "verify", ["repaired"])
     settings = SolverSettings(max_iters=args.max_iters, rel_tol=args.rel_tol, stall_iters=args.stall_iters)
-    with timings.step("solve", log):
+    with timings.step("solve"):
         check = downstream_check(kf["reference"], kf["faces"], {"original": kf["target"], "repaired": ve["repaired"]},
                                  args.alphas, args.k_bend, args.k_stretch, settings)
     write_artifact(args.out, "downstream", check.datasets(),

@@ -25,13 +25,13 @@ def build_parser():
 
 def main(args, log):
     timings = Timings()
-    with timings.step("read", log):
+    with timings.step("read"):
         data, _ = read_artifact(args.verify, "verify", ["repaired"])
         V_tgt, F = read_mesh(args.target)
     X = data["repaired"]
     if X.shape != V_tgt.shape:
         raise InputError(args.target, f"{len(V_tgt)} vertices, the repaired pose has {len(X)}")
-    with timings.step("write", log):
+    with timings.step("write"):
         write_like(args.out, X, F, args.target)
     V_back, F_back = read_mesh(args.out)
     if not (np.array_equal(F_back, F) and np.array_equal(V_back, X)):

@@ -15,12 +15,12 @@ import numpy as np
 
 from posefix.pipeline import checkpoint
 from posefix.pipeline.artifacts import config_hash, read_artifact, write_artifact
-from posefix.pipeline.cli import run_stage, stage_parser
+from posefix.pipeline.cli import library_defaults, run_stage, stage_parser
 from posefix.pipeline.errors import InputError
 from posefix.pipeline.files import file_sha256
 from posefix.pipeline.timings import Timings
 from posefix.spacetime.factorization import FactorizationError
-from posefix.spacetime.fit import FitSettings, iterate, resume_fit, start_fit, truncate_history
+from posefix.spacetime.fit import FitSettings, iterate
 
 DOCS = {
     "centers": ("length", "RBF centres gamma_j in space-time, (n, 4) float64"),
@@ -59,16 +59,20 @@ def build_parser():
     parser.add_argument("--constraints", required=True, help="constraints.h5 of the pose")
     parser.add_argument("--out", required=True, help="fit.h5 to write")
     parser.add_argument("--checkpoint", default=None, help="checkpoint folder (default: <out> with .checkpoint)")
+    defaults = library_defaults(FitSettings)
     parser.add_argument("--eps-rel", type=float, default=1e-4, help="stop at max error < eps_rel * bbox diagonal")
-    parser.add_argument("--eps-rms-rel", type=float, default=0.0, help="stop at rms error < this * diagonal (0: off)")
-    parser.add_argument("--max-centers", type=int, default=4000, help="stop at this many centres")
-    parser.add_argument("--candidates", type=int, default=1024, help="p: worst constraints considered per iteration")
-    parser.add_argument("--batch", type=int, default=128, help="m: centres added per iteration")
-    parser.add_argument("--selection", choices=("fps", "worst"), default="fps",
+    parser.add_argument("--eps-rms-rel", type=float, default=0.0,
+                        help="stop at rms error < this * diagonal (0: off)")
+    parser.add_argument("--max-centers", type=int, default=defaults["max_centers"], help="stop at this many centres")
+    parser.add_argument("--candidates", type=int, default=defaults["candidates"],
+                        help="p: worst constraints considered per iteration")
+    parser.add_argument("--batch", type=int, default=defaults["batch"], help="m: centres added per iteration")
+    parser.add_argument("--selection", choices=("fps", "worst"), default=defaults["selection"],
                         help="fps: farthest points within the candidates (S0); worst: the m worst (Carr et al.)")
-    parser.add_argument("--update", choices=("blocked", "full"), default="blocked",
+    parser.add_argument("--update", choices=("blocked", "full"), default=defaults["update"],
                         help="blocked Cholesky updates or full LU refactorization every iteration")
-    parser.add_argument("--memory-gb", type=float, default=4.0, help="budget of the kernel cache")
+    parser.add_argument("--memory-gb", type=float, default=defaults["memory_bytes"] / 1e9,
+                        help="budget of the kernel cache")
     return parser
 
 
@@ -76,7 +80,7 @@ def main(args, log):
     if args.max_centers < 16 or args.batch < 1 or args.candidates < args.batch or args.eps_rel < 0:
         raise InputError("arguments", "need --max-centers >= 16, --batch >= 1, --candidates >= --batch, --eps-rel >= 0")
     timings = Timings()
-    with timings.step("read", log):
+    with timings.step("read"):
         data, attrs = read_artifact(args.constraints, "constraints", ["points", "values"])
     d = float(attrs["metrics"]["bbox_diagonal"])
     settings = FitSettings(eps=args.eps_rel * d, eps_rms=args.eps_rms_rel * d, max_centers=args.max_centers,
@@ -87,19 +91,13 @@ def main(args, log):
     points, values = data["points"], data["values"]
     log.info("%d constraints; eps = %.3g (%.3g d), max %d centres, %s selection, %s update",
              len(points), settings.eps, args.eps_rel, args.max_centers, args.selection, args.update)
-    with timings.step("start", log):
-        fit, resumed = _start_or_resume(points, values, settings, folder, key, args.constraints, log)
-    previous, first = (fit.state() if resumed else None), True
-
-    def on_iteration(fit, record):
-        nonlocal previous, first
-        if first:  # deltas of a longer or different stored fit go before the first new commit
-            checkpoint.truncate(folder, record["iteration"])
-            first = False
-        previous = checkpoint.save_iteration(folder, key, _settings_dict(settings), fit, previous)
-
-    with timings.step("iterate", log):
-        reason = iterate(fit, on_iteration=on_iteration)
+    with timings.step("start"):
+        try:
+            fit, resumed = checkpoint.start_or_resume(points, values, settings, folder, key)
+        except FactorizationError as exc:
+            raise InputError(args.constraints, str(exc)) from None
+    with timings.step("iterate"):
+        reason = iterate(fit, on_iteration=checkpoint.committer(folder, key, _settings_dict(settings), fit, resumed))
     last = fit.history[-1]
     log.info("stopped (%s) at %d centres: max error %.3g d, rms %.3g d, max kappa %.3g", reason, fit.n,
              last["max_error"] / d, last["rms_error"] / d, max(r["condition"] for r in fit.history))
@@ -119,23 +117,6 @@ def main(args, log):
                  "resumed_iterations": resumed,
                  "seconds": sum(timings.get(k, 0.0) for k in ("start", "iterate"))},
         docs=docs)
-
-
-def _start_or_resume(points, values, settings, folder, key, source, log):
-    """A fit continuing the checkpoint where that is exact, else a fresh one.
-
-    Returns the fit and how many stored iterations it reuses.
-    """
-    stored, history = checkpoint.load(folder, key)
-    keep = truncate_history(history, settings) if stored is not None else 0
-    try:
-        if keep:
-            log.info("resuming from checkpoint %s: %d of %d stored iterations (%d centres)", folder, keep,
-                     len(history), history[keep - 1]["centers"])
-            return resume_fit(points, values, settings, stored, history[:keep]), keep
-        return start_fit(points, values, settings), 0
-    except FactorizationError as exc:
-        raise InputError(source, str(exc)) from None
 
 
 def _settings_dict(settings):

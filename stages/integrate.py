@@ -12,7 +12,7 @@ import posefix  # noqa: F401  (runtime defaults before numpy)
 import numpy as np
 
 from posefix.pipeline.artifacts import read_artifact, write_artifact
-from posefix.pipeline.cli import run_stage, stage_parser
+from posefix.pipeline.cli import library_defaults, run_stage, stage_parser
 from posefix.pipeline.errors import InputError
 from posefix.pipeline.timings import Timings
 from posefix.spacetime.integration import field_velocity, rk45
@@ -35,10 +35,11 @@ def build_parser():
     parser.add_argument("--out", required=True, help="integrate.h5 to write")
     parser.add_argument("--device", choices=("auto", "cpu", "gpu", "numpy"), default="auto",
                         help="OpenCL device type, or the numpy backend")
-    parser.add_argument("--rtol", type=float, default=1e-9, help="relative tolerance per step")
+    defaults = library_defaults(rk45)
+    parser.add_argument("--rtol", type=float, default=defaults["rtol"], help="relative tolerance per step")
     parser.add_argument("--atol-rel", type=float, default=1e-7,
                         help="absolute tolerance per step relative to the bbox diagonal (1e-3 eps)")
-    parser.add_argument("--h0", type=float, default=0.05, help="first step size (time units)")
+    parser.add_argument("--h0", type=float, default=defaults["h0"], help="first step size (time units)")
     parser.add_argument("--vec", type=int, default=0, help="OpenCL vector width over centres (0: from the device)")
     return parser
 
@@ -48,7 +49,7 @@ def main(args, log):
         raise InputError("arguments", "--rtol and --atol-rel must be > 0 and --h0 in (0, 1]")
     os.environ.setdefault("POCL_MAX_PTHREAD_COUNT", str(max(1, args.threads)))  # before the OpenCL runtime starts
     timings = Timings()
-    with timings.step("read", log):
+    with timings.step("read"):
         fit, _ = read_artifact(args.fit, "fit", ["centers", "weights", "poly", "shift", "scale"])
         _, cattrs = read_artifact(args.constraints, "constraints", [])
         kf, _ = read_artifact(args.keyframes, "keyframes", ["reference"])
@@ -67,7 +68,7 @@ def main(args, log):
             backend, device_name = "opencl", text
     log.info("integrating %d vertices through %d centres on %s (rtol %.1e, atol %.1e d)", len(X0), len(field.weights),
              device_name, args.rtol, args.atol_rel)
-    with timings.step("integrate", log):
+    with timings.step("integrate"):
         if device is not None:
             from posefix.spacetime.integration_opencl import rk45_opencl
             X1, samples, steps, rejected = rk45_opencl(device, field, tau, X0, times, args.rtol, args.atol_rel * d,

@@ -13,7 +13,7 @@ import numpy as np
 
 from posefix.mesh.geometry import bbox_diagonal
 from posefix.pipeline.artifacts import write_artifact
-from posefix.pipeline.cli import run_stage, stage_parser
+from posefix.pipeline.cli import library_defaults, run_stage, stage_parser
 from posefix.pipeline.library import read_pose_pair
 from posefix.pipeline.timings import Timings
 from posefix.spacetime import keyframes as kf
@@ -42,7 +42,8 @@ def build_parser():
     parser.add_argument("--reference", required=True, help="reference mesh file")
     parser.add_argument("--target", required=True, help="target pose mesh file")
     parser.add_argument("--out", required=True, help="keyframes.h5 to write")
-    parser.add_argument("--count", type=count_arg, default=11, help="number of key frames K")
+    parser.add_argument("--count", type=count_arg, default=library_defaults(kf.keyframes)["count"],
+                        help="number of key frames K")
     parser.add_argument("--no-align", dest="align", action="store_false",
                         help="do not remove the global rigid motion first")
     parser.add_argument("--no-unwrap", dest="unwrap", action="store_false",
@@ -52,19 +53,19 @@ def build_parser():
 
 def main(args, log):
     timings = Timings()
-    with timings.step("read", log):
+    with timings.step("read"):
         V_ref, V_tgt, F = read_pose_pair(args.reference, args.target)
     d = bbox_diagonal(V_ref)
     log.info("%s -> %s: %d vertices, %d faces, K = %d", Path(args.reference).name, Path(args.target).name,
              len(V_ref), len(F), args.count)
-    with timings.step("prepare", log):
+    with timings.step("prepare"):
         interp = kf.prepare(V_ref, V_tgt, F, align=args.align, unwrap=args.unwrap)
     angle = np.linalg.norm(interp.omega, axis=1)
     log.info("global rotation %.1f deg; per-face rotation median %.1f, max %.1f deg; %d faces unwrapped",
              np.degrees(np.linalg.norm(interp.global_omega)), np.degrees(np.median(angle)),
              np.degrees(angle.max()), np.count_nonzero(interp.turns))
     t = np.linspace(0.0, 1.0, args.count)
-    with timings.step("frames", log):
+    with timings.step("frames"):
         frames = np.stack([kf.frame(interp, ti) for ti in t])
     err0 = np.abs(frames[0] - V_ref).max() / d
     err1 = np.abs(frames[-1] - V_tgt).max() / d

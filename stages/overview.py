@@ -35,7 +35,7 @@ def main(args, log):
         library, entries = summary["library"], summary["poses"]
     except (ValueError, KeyError, TypeError) as exc:
         raise InputError(args.summary, f"not a posefix summary.json ({exc})") from None
-    with timings.step("figure", log):
+    with timings.step("figure"):
         write_figure(args.png, library_overview(entries, args.bar, title=f"posefix: {library}"))
     atomic_write_bytes(args.html, summary_html(library, entries, args.bar).encode())
     for entry in entries:

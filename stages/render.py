@@ -40,7 +40,7 @@ def build_parser():
 
 def main(args, log):
     timings = Timings()
-    with timings.step("read", log):
+    with timings.step("read"):
         kf, _ = read_artifact(args.keyframes, "keyframes", ["reference", "target", "faces"])
         cl, _ = read_artifact(args.classify, "classify", ["mask", "pairs", "pair_offsets", "intersecting_faces"])
         fi, fattrs = read_artifact(args.fit, "fit", [f"history/{k}" for k in HISTORY])
@@ -52,7 +52,7 @@ def main(args, log):
     repaired_faces = intersecting_faces(ve["pairs"], m)
     R = camera(V_ref)
     made = {}
-    with timings.step("figures", log):
+    with timings.step("figures"):
         made["renders"] = figures.renders(V_tgt, ve["repaired"], F, R, target_faces, repaired_faces, reference_faces,
                                           title=args.pose)
         made["deviation"] = figures.deviation_map(ve["repaired"], F, R, ve["deviation"], ve["replaced"],
@@ -65,7 +65,7 @@ def main(args, log):
                                           json.loads(fattrs["config"])["eps_rel"], title=args.pose)
         made["timings"] = figures.timings({s: benchmark_seconds(args.benchmarks, s) for s in TIMED_STAGES},
                                           title=args.pose)
-    with timings.step("write", log):
+    with timings.step("write"):
         for name in POSE_FIGURES:
             write_figure(Path(args.out) / f"{name}.png", made[name])
     log.info("wrote %d figures into %s", len(POSE_FIGURES), args.out)

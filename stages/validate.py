@@ -42,13 +42,13 @@ def main(args, log):
     poses = [p for p in (args.poses or "").split(",") if p] or None
     library = discover_library(args.library, reference=args.reference, poses=poses, name=args.name)
     log.info("library %s: reference %s, %d poses", library.name, library.reference.name, len(library.poses))
-    with timings.step("read", log):
+    with timings.step("read"):
         V_ref, F = read_reference(library.reference.path)
         for i, pose in enumerate(library.poses, 1):
             read_pose(pose.path, V_ref, F)
             log.info("pose %d/%d %s: ok", i, len(library.poses), pose.name)
     files = (library.reference,) + library.poses
-    with timings.step("hash", log):
+    with timings.step("hash"):
         sha = [file_sha256(f.path) for f in files]
     write_artifact(
         args.out, "validate",

@@ -58,7 +58,7 @@ def build_parser():
 
 def main(args, log):
     timings = Timings()
-    with timings.step("read", log):
+    with timings.step("read"):
         kf, _ = read_artifact(args.keyframes, "keyframes", ["reference", "target", "faces"])
         cl, _ = read_artifact(args.classify, "classify", ["mask", "pairs", "pair_offsets"])
         it, _ = read_artifact(args.integrate, "integrate", ["positions"])

@@ -23,3 +23,18 @@ def test_checkpoint_ignores_another_key_and_a_half_written_iteration(tmp_path):
     assert checkpoint.load(tmp_path, "other") == (None, [])
     (tmp_path / "iter-00001.npz").unlink()
     assert checkpoint.load(tmp_path, "k1") == (None, [])
+
+
+def test_a_resumed_fit_continues_exactly_as_an_uninterrupted_one(tmp_path):
+    Y, V = smooth_field_problem(600)
+    short, longer = FitSettings(eps=0.0, max_centers=200, batch=64), FitSettings(eps=0.0, max_centers=330, batch=64)
+    fit, resumed = checkpoint.start_or_resume(Y, V, short, tmp_path, "k")
+    assert resumed == 0
+    iterate(fit, on_iteration=checkpoint.committer(tmp_path, "k", {}, fit, resumed))
+    again, resumed = checkpoint.start_or_resume(Y, V, longer, tmp_path, "k")
+    assert 0 < resumed < len(fit.history)  # the short fit's last, cut batch is not one the longer fit makes
+    iterate(again, on_iteration=checkpoint.committer(tmp_path, "k", {}, again, resumed))
+    whole = start_fit(Y, V, longer)
+    iterate(whole)
+    assert np.array_equal(again.order, whole.order) and np.array_equal(again.weights, whole.weights)
+    assert len(checkpoint.load(tmp_path, "k")[1]) == len(whole.history)

@@ -5,9 +5,10 @@ import time
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.sparse.linalg import LinearOperator, cg, splu
+from scipy.sparse.linalg import LinearOperator, cg
 
 from posefix.mesh.geometry import face_areas
+from posefix.mesh.sparse import factorized
 
 log = logging.getLogger(__name__)
 
@@ -169,7 +170,7 @@ class _NormalEquations:
             if info == 0 and np.all(np.isfinite(d)):
                 return d
         try:
-            self.lu = splu(H, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0, options={"SymmetricMode": True})
+            self.lu = factorized(H, ordering="MMD_AT_PLUS_A", symmetric=True)
         except RuntimeError:  # exactly singular
             self.lu = None
             return None

@@ -3,7 +3,8 @@
 import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
-from scipy.sparse.linalg import splu
+
+from posefix.mesh.sparse import factorized
 
 
 def harmonic_extension(A, values, known):
@@ -42,7 +43,7 @@ def harmonic_extension(A, values, known):
         return out
     degree = np.asarray(A[solve].sum(axis=1)).ravel()
     L_ss = (sp.diags(degree) - A[solve][:, solve]).tocsc()
-    out[solve] = splu(L_ss).solve(A[solve][:, known] @ out[known])
+    out[solve] = factorized(L_ss).solve(A[solve][:, known] @ out[known])
     return out
 
 
@@ -75,5 +76,5 @@ def biharmonic_extension(A, values, known, unknown):
     L = (sp.diags(np.asarray(A.sum(axis=1)).ravel()) - A).tocsc()
     Q = (L.T @ L).tocsr()
     Q_ss = Q[solve][:, solve] + sp.identity(len(solve)) * 1e-12  # regular where a part touches no zero vertex
-    out[solve] = splu(Q_ss.tocsc()).solve(-(Q[solve][:, np.flatnonzero(known)] @ out[known]))
+    out[solve] = factorized(Q_ss).solve(-(Q[solve][:, np.flatnonzero(known)] @ out[known]))
     return out

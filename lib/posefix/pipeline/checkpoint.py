@@ -10,20 +10,72 @@ Every file is written to a temporary name and renamed; ``meta.json`` is rewritte
 the commit record: a kill at any moment leaves either the previous or the new iteration
 committed, never a half-written one. Everything the fit's state holds is append-only
 (:meth:`posefix.spacetime.fit.GreedyFit.state`), so each iteration stores only its delta.
+
+:func:`start_or_resume` continues a checkpoint where that gives exactly what an uninterrupted fit
+with the same settings gives (:func:`posefix.spacetime.fit.truncate_history`), and
+:func:`committer` is the ``on_iteration`` callback that commits every iteration.
 """
 
 import io
 import json
+import logging
 import os
 from pathlib import Path
 
 import numpy as np
 
 from posefix.pipeline.files import atomic_write_bytes
+from posefix.spacetime.fit import resume_fit, start_fit, truncate_history
+
+log = logging.getLogger(__name__)
 
 _APPENDED_ROWS = ("order", "solver/H", "solver/Pi")     # grow along axis 0
 _APPENDED_COLS = ("solver/G",)                          # grows along axis 1
 _FIXED = ("solver/pi_p", "solver/phi_pp")               # set once
+
+
+def start_or_resume(points, values, settings, folder, key):
+    """A fit continuing the checkpoint in ``folder`` where that is exact, else a fresh one.
+
+    Parameters
+    ----------
+    points, values, settings
+        As in :func:`posefix.spacetime.fit.start_fit`.
+    folder : str or Path
+    key : str
+        Identifies the constraints and centre-selection parameters; a checkpoint of another key is ignored.
+
+    Returns
+    -------
+    fit : posefix.spacetime.fit.GreedyFit
+    resumed : int
+        How many stored iterations it reuses (0: a fresh fit).
+    """
+    stored, history = load(folder, key)
+    keep = truncate_history(history, settings) if stored is not None else 0
+    if not keep:
+        return start_fit(points, values, settings), 0
+    log.info("resuming from checkpoint %s: %d of %d stored iterations (%d centres)", folder, keep, len(history),
+             history[keep - 1]["centers"])
+    return resume_fit(points, values, settings, stored, history[:keep]), keep
+
+
+def committer(folder, key, settings, fit, resumed):
+    """The ``on_iteration`` callback of :func:`posefix.spacetime.fit.iterate` that commits every iteration.
+
+    Stored iterations beyond the ``resumed`` ones (of a longer or different fit) are forgotten before
+    the first new commit. ``settings`` (a dict) is recorded for information.
+    """
+    previous, first = (fit.state() if resumed else None), True
+
+    def on_iteration(fit, record):
+        nonlocal previous, first
+        if first:
+            truncate(folder, record["iteration"])
+            first = False
+        previous = save_iteration(folder, key, settings, fit, previous)
+
+    return on_iteration
 
 
 def save_iteration(folder, key, settings, fit, previous):

@@ -11,6 +11,7 @@ stderr, everything (DEBUG too) in the ``--log`` file. Library modules log throug
 """
 
 import argparse
+import inspect
 import logging
 import sys
 import time
@@ -86,6 +87,15 @@ def configure_logging(stage, path=None):
         handler.setFormatter(fmt)
         root.addHandler(handler)
     return logging.getLogger(f"posefix.stages.{stage}")
+
+
+def library_defaults(obj):
+    """Parameter name -> default of a function, or of a (data)class's constructor; parameters without one left out.
+
+    Stages take their argparse defaults from here, so that they are the library's (which
+    ``tests/test_defaults.py`` compares with config.yaml).
+    """
+    return {name: p.default for name, p in inspect.signature(obj).parameters.items() if p.default is not p.empty}
 
 
 def int_list(text):

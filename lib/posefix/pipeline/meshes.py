@@ -85,7 +85,7 @@ def read_mesh(path):
     """
     mf = _known(path)
     fmt = FORMATS[mf.fmt]
-    data = read_bytes(mf)
+    data = _read_bytes(mf)
     declared = fmt.declared_counts(data)
     fmt.check(path, data)
     try:
@@ -93,7 +93,7 @@ def read_mesh(path):
         V = np.asarray(mesh.vertices, dtype=np.float64)
         F = np.asarray(mesh.faces, dtype=np.int64).reshape(-1, 3)
     except Exception as exc:  # trimesh raises many types for malformed files
-        reason = one_line(exc)
+        reason = _one_line(exc)
         if re.search(r"out of bounds|outside the range", reason):
             raise InputError(path, f"a face has a vertex index out of range ({reason})") from None
         raise InputError(path, f"cannot be read as {mf.fmt.upper()}: {reason}") from None
@@ -101,7 +101,7 @@ def read_mesh(path):
     return V, F
 
 
-def read_bytes(mf):
+def _read_bytes(mf):
     """The bytes of a :class:`MeshFile`, gunzipped when it is ``.gz``; InputError when there are none."""
     try:
         with open(mf.path, "rb") as fh:
@@ -114,7 +114,7 @@ def read_bytes(mf):
         try:
             data = gzip.decompress(data)
         except (OSError, EOFError) as exc:
-            raise InputError(mf.path, f"not a valid gzip file: {one_line(exc)}") from None
+            raise InputError(mf.path, f"not a valid gzip file: {_one_line(exc)}") from None
         if not data:
             raise InputError(mf.path, "empty file (after gunzip)")
     return data
@@ -180,14 +180,14 @@ def write_like(path, V, F, source):
     if dst is None or (dst.fmt, dst.gz) != (src.fmt, src.gz):
         raise InputError(path, f"must have the same format as {source} ({src.suffix})")
     V, F = np.asarray(V, dtype=np.float64), np.asarray(F, dtype=np.int64)
-    _write(dst, FORMATS[src.fmt].encode_like(read_bytes(src), V, F))
+    _write(dst, FORMATS[src.fmt].encode_like(_read_bytes(src), V, F))
 
 
 def _write(mf, data):
     atomic_write_bytes(mf.path, gzip.compress(data, compresslevel=6, mtime=0) if mf.gz else data)
 
 
-def one_line(exc):
+def _one_line(exc):
     """The first line of an exception's message (at most 200 characters), or its type's name."""
     text = str(exc).strip().splitlines()
     return (text[0] if text else type(exc).__name__)[:200]

@@ -1,17 +1,20 @@
 """Wall seconds of stages: per sub-step while a stage runs, and per stage from Snakemake's benchmark files."""
 
 import csv
+import logging
 import time
 from contextlib import contextmanager
 from pathlib import Path
 
+log = logging.getLogger(__name__)
+
 
 class Timings(dict):
-    """Wall seconds per named sub-step; ``with timings.step("solve", log): ...`` adds and logs one."""
+    """Wall seconds per named sub-step; ``with timings.step("solve"): ...`` adds and logs one."""
 
     @contextmanager
-    def step(self, name, log):
-        """Time the block, add its seconds to ``self[name]`` and log them (``log`` a ``logging.Logger``)."""
+    def step(self, name):
+        """Time the block, add its seconds to ``self[name]`` and log them."""
         start = time.perf_counter()
         yield
         seconds = time.perf_counter() - start

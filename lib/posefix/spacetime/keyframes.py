@@ -23,12 +23,11 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.sparse as sp
-from scipy.sparse.linalg import splu
 
 from posefix.mesh.geometry import vertex_areas
 from posefix.mesh.laplacian import cotangent_laplacian, face_mass, gradient_operator
-from posefix.mesh.rotations import (kabsch, polar_decomposition, rotation_exp, rotation_log,
-                               unwrap_rotation_vectors)
+from posefix.mesh.rotations import kabsch, polar_decomposition, rotation_exp, rotation_log, unwrap_rotation_vectors
+from posefix.mesh.sparse import factorized
 from posefix.mesh.topology import face_adjacency, vertex_components
 
 
@@ -101,7 +100,7 @@ def prepare(V_ref, V_tgt, F, align=True, unwrap=True):
     L = cotangent_laplacian(V_ref, F)
     anchors = np.unique(labels, return_index=True)[1]
     free = np.setdiff1d(np.arange(n), anchors)
-    solver = splu(L[free][:, free].tocsc(), permc_spec="MMD_AT_PLUS_A") if len(free) else None
+    solver = factorized(L[free][:, free], ordering="MMD_AT_PLUS_A") if len(free) else None
     return Interpolation(
         F=F, omega=omega, turns=turns, stretch=S, global_omega=rotation_log(R_g[None])[0],
         c_ref=c_ref, c_tgt=c_tgt,

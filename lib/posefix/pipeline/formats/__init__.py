@@ -16,8 +16,3 @@ from posefix.pipeline.formats import obj, off, ply
 
 FORMATS = {"obj": obj, "ply": ply, "off": off}
 """Format modules by lower-case extension."""
-
-
-def format_module(fmt):
-    """The module of format ``fmt`` (``obj``, ``ply`` or ``off``)."""
-    return FORMATS[fmt]

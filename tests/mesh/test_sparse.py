@@ -1,0 +1,29 @@
+"""The sparse direct solver: exact on a Laplacian system, the same in symmetric mode, singular matrices refused."""
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+
+from conftest import icosphere
+from posefix.mesh.laplacian import cotangent_laplacian
+from posefix.mesh.sparse import factorized
+
+
+def _pinned_laplacian():
+    V, F = icosphere(2)
+    L = cotangent_laplacian(V, F)
+    free = np.arange(1, len(V))  # pin vertex 0: non-singular, symmetric positive definite
+    return L[free][:, free], np.random.default_rng(0).normal(size=(len(free), 3))
+
+
+@pytest.mark.parametrize("ordering, symmetric", [("COLAMD", False), ("MMD_AT_PLUS_A", False), ("MMD_AT_PLUS_A", True)])
+def test_solves_a_pinned_cotangent_laplacian(ordering, symmetric):
+    A, b = _pinned_laplacian()
+    x = factorized(A, ordering=ordering, symmetric=symmetric).solve(b)
+    assert np.abs(A @ x - b).max() < 1e-10 * np.abs(b).max()
+
+
+def test_a_diagonal_system_and_a_singular_one():
+    assert factorized(sp.diags([2.0, 4.0])).solve(np.array([1.0, 1.0])).tolist() == [0.5, 0.25]
+    with pytest.raises(RuntimeError):
+        factorized(sp.csc_matrix(np.array([[1.0, 1.0], [1.0, 1.0]])))
