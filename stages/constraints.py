@@ -29,7 +29,8 @@ def build_parser():
     parser.add_argument("--classify", required=True, help="classify.h5 of the pose (V_C)")
     parser.add_argument("--out", required=True, help="constraints.h5 to write")
     defaults = library_defaults(spacetime_constraints)
-    parser.add_argument("--samples", type=int, default=defaults["samples"], help="s: constraints at t_i = i/s, i = 0..s")
+    parser.add_argument("--samples", type=int, default=defaults["samples"],
+                        help="s: constraints at t_i = i/s, i = 0..s")
     parser.add_argument("--tau", type=float, default=0.3,
                         help="time-axis scale relative to the reference's bbox diagonal")
     parser.add_argument("--tangents", choices=("hermite", "spline"), default=defaults["tangents"],

@@ -71,7 +71,8 @@ def main(args, log):
                            "max_iters": args.max_iters, "rel_tol": args.rel_tol, "stall_iters": args.stall_iters},
                    inputs=[args.keyframes, args.verify], timings=timings, metrics=check.metrics(), docs=DOCS)
     if args.png:
-        write_figure(args.png, figures.downstream_history(check.curves(), title=f"{args.pose}: Gauss-Newton discrete shells"))
+        title = f"{args.pose}: Gauss-Newton discrete shells"
+        write_figure(args.png, figures.downstream_history(check.curves(), title=title))
 
 
 if __name__ == "__main__":

@@ -73,7 +73,8 @@ def test_repair_functions_are_short_with_few_parameters():
         for node in ast.walk(ast.parse(path.read_text())):
             if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
                 args = node.args
-                count = len(args.posonlyargs) + len(args.args) + len(args.kwonlyargs) + bool(args.vararg) + bool(args.kwarg)
+                count = (len(args.posonlyargs) + len(args.args) + len(args.kwonlyargs) + bool(args.vararg)
+                         + bool(args.kwarg))
                 count -= bool(args.args) and args.args[0].arg in ("self", "cls")
                 where = f"{path.name}:{node.lineno} {node.name}"
                 assert node.end_lineno - node.lineno + 1 <= 50, f"{where}: {node.end_lineno - node.lineno + 1} lines"

@@ -74,7 +74,7 @@ class DownstreamCheck:
             "handles": self.handles}
 
     def metrics(self):
-        """Converged runs and iterations per example (``<example>_converged``, ``<example>_iterations``) and ``runs``."""
+        """Converged runs and iterations per example (``<example>_converged``, ``<example>_iterations``), ``runs``."""
         out = {}
         for example, name in enumerate(EXAMPLES):
             sel = [r for g, r in zip(self.grid, self.runs) if g[2] == example]

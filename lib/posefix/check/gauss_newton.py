@@ -1,4 +1,7 @@
-"""Gauss–Newton with step halving for sums of squared residuals with a sparse Jacobian (:class:`posefix.check.shells.ShellEnergy`)."""
+"""Gauss–Newton with step halving for sums of squared residuals with a sparse Jacobian.
+
+The energy is a :class:`posefix.check.shells.ShellEnergy` (residuals and Jacobian of discrete shells).
+"""
 
 import logging
 import time
