@@ -15,12 +15,23 @@ def test_number_lists():
         int_list("1,x")
 
 
-def test_library_loggers_reach_the_stage_log_file(tmp_path, capsys):
+@pytest.fixture
+def posefix_logger():
+    """The ``posefix`` logger as it was before the test (configure_logging changes it for the process)."""
+    root = logging.getLogger("posefix")
+    saved = root.handlers[:], root.level, root.propagate
+    yield root
+    for handler in root.handlers:
+        handler.close()
+    root.handlers[:], root.level, root.propagate = saved[0], saved[1], saved[2]
+
+
+def test_library_loggers_reach_the_stage_log_file(tmp_path, capsys, posefix_logger):
     log = configure_logging("demo", tmp_path / "demo.log")
     logging.getLogger("posefix.repair.sequence").info("from the library")
     logging.getLogger("posefix.check.gauss_newton").debug("detail")
     log.info("from the stage")
-    for handler in logging.getLogger("posefix").handlers:
+    for handler in posefix_logger.handlers:
         handler.flush()
     text = (tmp_path / "demo.log").read_text()
     assert "posefix demo: from the library" in text and "posefix demo: detail" in text
@@ -36,7 +47,7 @@ def _run(main, argv=()):
     return exit_info.value.code
 
 
-def test_errors_become_one_line_and_an_exit_code(capsys):
+def test_errors_become_one_line_and_an_exit_code(capsys, posefix_logger):
     def bad_input(args, log):
         raise InputError("a.obj", "no faces")
 
