@@ -77,7 +77,7 @@ def main(args, log):
          "replaced": result.replaced, "new_faces": result.new, "pairs": result.pairs},
         params=asdict(settings),
         inputs=[args.keyframes, args.classify, args.integrate, args.fit], timings=timings,
-        metrics=result.metrics(problem), docs=DOCS)
+        metrics=result.metrics, docs=DOCS)
 
 
 if __name__ == "__main__":

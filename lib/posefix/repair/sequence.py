@@ -77,6 +77,8 @@ class RepairResult:
         Their summaries (:func:`posefix.repair.deviation.deviation`).
     seconds : dict
         Wall seconds of ``reproduce`` (both snaps), ``fallback`` and ``verify``.
+    metrics : dict
+        The scalar results of ``verify.h5`` (``docs/artifacts.md``).
     """
 
     X: np.ndarray
@@ -89,19 +91,7 @@ class RepairResult:
     summary: dict
     integrated: dict
     seconds: dict
-
-    def metrics(self, problem):
-        """The scalar results of ``verify.h5`` (``docs/artifacts.md``), dict."""
-        m = len(problem.F)
-        return {"vertices": len(self.X), "faces": m,
-                "intersecting_faces_reference": int(problem.reference_faces.sum()),
-                "intersecting_faces_target": int(problem.target_faces.sum()),
-                "intersecting_faces_repaired": int(self.faces.sum()), "repaired_new": int(self.new.sum()),
-                "intersecting_faces_keyframes_max": int(max(intersecting_faces(p, m).sum()
-                                                            for p in problem.frame_pairs)),
-                **flag_counts(self.replaced, self.new, problem.F),
-                **{f"deviation_{k}": v for k, v in self.summary.items()},
-                **{f"integrated_deviation_{k}": v for k, v in self.integrated.items()}}
+    metrics: dict = None
 
 
 def repair_pose(problem, X, d, eps, fit_max_error_rel, settings=RepairSettings()):
@@ -141,7 +131,8 @@ def repair_pose(problem, X, d, eps, fit_max_error_rel, settings=RepairSettings()
     seconds = {"reproduce": (t1 - t0) + (t3 - t2), "fallback": t2 - t1, "verify": time.perf_counter() - t3}
     result = RepairResult(X, replaced, pairs, faces, faces & ~problem.reference_faces, dev, integrated_dev,
                           summary, integrated, seconds)
-    _log_result(result, problem)
+    result.metrics = _metrics(result, problem)
+    _log_result(result)
     return result
 
 
@@ -155,8 +146,21 @@ def _snap(problem, X, replaced, reach, settings):
     return X, replaced | (moved * np.uint8(REPRODUCED)) | (pushed * np.uint8(PUSHED))
 
 
-def _log_result(result, problem):
-    m, t = result.metrics(problem), result.seconds
+def _metrics(r, problem):
+    """The scalar results of ``verify.h5`` of a :class:`RepairResult`, dict."""
+    m = len(problem.F)
+    return {"vertices": len(r.X), "faces": m,
+            "intersecting_faces_reference": int(problem.reference_faces.sum()),
+            "intersecting_faces_target": int(problem.target_faces.sum()),
+            "intersecting_faces_repaired": int(r.faces.sum()), "repaired_new": int(r.new.sum()),
+            "intersecting_faces_keyframes_max": int(max(intersecting_faces(p, m).sum() for p in problem.frame_pairs)),
+            **flag_counts(r.replaced, r.new, problem.F),
+            **{f"deviation_{k}": v for k, v in r.summary.items()},
+            **{f"integrated_deviation_{k}": v for k, v in r.integrated.items()}}
+
+
+def _log_result(result):
+    m, t = result.metrics, result.seconds
     log.info("reproduce %.3f s, fallback %.3f s, verify %.3f s", t["reproduce"], t["fallback"], t["verify"])
     log.info("intersecting faces: reference %d, target %d, repaired %d (new %d); %d vertices changed by the fallback",
              m["intersecting_faces_reference"], m["intersecting_faces_target"], m["intersecting_faces_repaired"],
