@@ -20,6 +20,7 @@ include: "rules/spacetime.smk"
 include: "rules/repair.smk"
 include: "rules/check.smk"
 include: "rules/report.smk"
+include: "rules/skeletal.smk"
 
 
 report: "rules/captions/workflow.rst"

@@ -20,6 +20,11 @@ from posefix.check.shells import shell_energy
 from posefix.mesh.contacts import contact_vertices
 from posefix.pipeline.demo import demo_library
 from posefix.repair.sequence import RepairSettings
+from posefix.skeletal.authoring import SkeletalPoser
+from posefix.skeletal.flow import MedialBallFlow, medial_ball_flow
+from posefix.skeletal.reconstruction import frame_maps
+from posefix.skeletal.rig import skinning_weights
+from posefix.skeletal.skeletal_mesh import skeletal_mesh
 from posefix.spacetime.classification import constraint_mask
 from posefix.spacetime.constraints import knot_tangents, spacetime_constraints
 from posefix.spacetime.fit import FitSettings
@@ -68,6 +73,16 @@ LIBRARY = {
     ("downstream", "max_iters"): [(SolverSettings, "max_iters", None)],
     ("downstream", "rel_tol"): [(SolverSettings, "rel_tol", None)],
     ("downstream", "stall_iters"): [(SolverSettings, "stall_iters", None)],
+    ("skeletal_pose", "medial"): [(skeletal_mesh, "medial", None)],
+    ("skeletal_pose", "tol"): [(skeletal_mesh, "tol", None)],
+    ("skeletal_pose", "smooth_iters"): [(skeletal_mesh, "smooth_iters", None)],
+    ("skeletal_pose", "smooth_step"): [(skeletal_mesh, "smooth_step", None)],
+    ("skeletal_pose", "falloff"): [(SkeletalPoser, "falloff", None), (skinning_weights, "falloff", None)],
+    ("skeletal_pose", "min_sine"): [(SkeletalPoser, "min_sine", None), (frame_maps, "min_sine", None)],
+    ("skeletal_pose", "tau"): [(SkeletalPoser.author, "tau", None), (MedialBallFlow, "tau", None),
+                               (medial_ball_flow, "tau", None)],
+    ("skeletal_pose", "max_iters"): [(SkeletalPoser.author, "max_iters", None), (MedialBallFlow.run, "max_iters", None),
+                                     (medial_ball_flow, "max_iters", None)],
 }
 # relative to the bbox diagonal in the config, lengths in the library: the library has no default
 RELATIVE = {
@@ -76,8 +91,10 @@ RELATIVE = {
     ("constraints", "tau"): [(spacetime_constraints, "tau")],
     ("fit", "eps_rel"): [(FitSettings, "eps")],
     ("integrate", "atol_rel"): [(rk45, "atol"), (rk45_opencl, "atol")],
+    ("skeletal_pose", "margin"): [(MedialBallFlow, "margin"), (medial_ball_flow, "margin"), (SkeletalPoser.author, "margin")],
 }
-WORKFLOW_ONLY = {("demo", "folder"), ("classify", "exclude"), ("integrate", "device")} | {
+WORKFLOW_ONLY = {("demo", "folder"), ("classify", "exclude"), ("integrate", "device"), ("skeletal_pose", "rig"),
+                 ("skeletal_pose", "mesh"), ("skeletal_pose", "out")} | {
     (section, "threads") for section, value in CONFIG.items() if isinstance(value, dict) and "threads" in value}
 """Keys of the workflow (paths, per-pose inputs, rule threads) or of a stage only (the OpenCL device choice)."""
 

@@ -13,7 +13,7 @@ from posefix import __version__
 from posefix.pipeline.artifacts import config_hash, inputs_hash
 
 STAGES = ["demo", "validate", "keyframes", "classify", "constraints", "fit", "integrate", "verify", "export",
-          "downstream", "summary", "render", "overview"]
+          "downstream", "summary", "render", "overview", "skeletal_pose"]
 
 
 def documented_datasets():
@@ -176,3 +176,48 @@ def test_export_refuses_a_target_of_another_size(demo_artifacts, tmp_path):
                      "--out", tmp_path / "r.obj", check=False)
     assert proc.returncode == 2 and "ball.obj" in proc.stderr and "Traceback" not in proc.stderr
     assert not (tmp_path / "r.obj").exists()
+
+
+@pytest.fixture(scope="module")
+def authored(tmp_path_factory):
+    """skeletal_pose on a small demo limb (12 vertices per ring) with the shipped demo rig."""
+    from posefix.pipeline import demo
+    from posefix.pipeline.meshes import write_mesh
+    folder = tmp_path_factory.mktemp("authored")
+    V, F, _ = demo.demo_library(around=12)
+    write_mesh(folder / "limb.obj", V, F)
+    args = ["--mesh", folder / "limb.obj", "--rig", ROOT / "rigs" / "demo-limb.yaml", "--max-iters", 5]
+    run_stage("skeletal_pose", *args, "--out", folder / "lib", "--artifact", folder / "a.h5")
+    run_stage("skeletal_pose", *args, "--out", folder / "again", "--artifact", folder / "b.h5")
+    return folder, V, F
+
+
+def test_skeletal_pose_writes_a_library_of_every_pose_and_variant(authored):
+    from posefix.pipeline.library import discover_library, read_pose
+    folder, V, F = authored
+    library = discover_library(folder / "lib")
+    assert library.reference.name == "demo-limb-reference"
+    assert sorted(p.name for p in library.poses) == sorted(f"demo-0{i}-{v}" for i in range(1, 5)
+                                                          for v in ("ssd", "variational", "flow"))
+    for pose in library.poses:
+        assert read_pose(pose.path, V, F).shape == V.shape
+        assert (folder / "again" / Path(pose.path).name).read_bytes() == Path(pose.path).read_bytes()
+    with h5py.File(folder / "a.h5") as fh:
+        assert fh["intersecting"].shape == (4, 3) and fh["skeleton/S"].shape == V.shape
+        assert len(fh["flow/demo-01/intersecting"]) == len(fh["flow/demo-01/step_seconds"]) + 1
+        documented = documented_datasets()["skeletal_pose"]
+        names = []
+        fh.visititems(lambda name, obj: names.append(name) if isinstance(obj, h5py.Dataset) else None)
+        flat = {re.sub(r"^flow/[^/]+/", "flow/<pose>/", n) for n in names}
+        assert flat == documented
+
+
+def test_skeletal_pose_rejects_a_bad_rig_in_one_line(authored, tmp_path):
+    folder, _, _ = authored
+    rig = tmp_path / "bad.yaml"
+    rig.write_text("joints: {a: {position: [0, 0, 0]}}\nposes: {p: {rotations: {b: [0, 0, 90]}}}\n")
+    proc = run_stage("skeletal_pose", "--mesh", folder / "limb.obj", "--rig", rig, "--out", tmp_path / "out",
+                     "--artifact", tmp_path / "a.h5", check=False)
+    assert proc.returncode == 2 and proc.stderr.strip().splitlines() == [
+        f"posefix skeletal_pose: error: {rig}: pose 'p': unknown joint(s) b"]
+    assert not (tmp_path / "out").exists() and not (tmp_path / "a.h5").exists()

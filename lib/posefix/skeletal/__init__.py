@@ -1,0 +1,1 @@
+"""S1: skeleton-based variational mesh deformation (Yoshizawa, Belyaev, Seidel 2007)."""

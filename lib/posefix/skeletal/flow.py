@@ -1,0 +1,205 @@
+"""The medial-ball flow: evolve a mesh towards the boundary of a union of balls (S1 §4, Eq. 6-10).
+
+The union of the balls ``(s_j^d, R_j)`` is ``f(z) = min_j |z - s_j^d| - R_j`` (Eq. 6). The flow is the
+semi-implicit step ``x <- x + tau (I + L)^-1 F(x)`` (Eq. 9: the operator of Eq. 4 with the skeletal vertices
+as fixed anchors, prefactorized by :class:`~posefix.skeletal.reconstruction.SkeletalReconstruction`), with
+``F = -f grad f`` (the antigradient of f^2 / 2) from the nearest ball of Eq. 10: for vertex ``i`` the ball
+``p`` minimising ``|x_i - s_p^d| - R_p`` over the vertices ``p`` within ``R_i`` of ``x_i`` (a kd-tree of the
+moving vertices, rebuilt every iteration). (Eq. 10 as printed drops the sign and the normalisation of
+``grad f``; we use the antigradient itself.)
+
+Beyond S1, ``margin``: where two parts of the surface interpenetrate, both are pushed to the ridge of
+``f`` between them and would end up touching. A ball ``j`` that was at least ``margin`` away from vertex
+``i`` in the rest pose (``|x_i - s_j| - R_j``) is inflated by ``min(margin, that clearance)`` for ``i``, so
+the parts stop ``margin`` apart; neighbouring balls (clearance ~0) are not inflated. ``margin = 0`` is S1.
+"""
+
+import logging
+import time
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from posefix.mesh.intersections import intersecting_faces, new_pairs, self_intersecting_pairs
+
+log = logging.getLogger(__name__)
+
+
+def union_of_balls(P, centres, radii, chunk=2048):
+    """The union-of-balls function ``f(z) = min_j |z - c_j| - r_j`` (Eq. 6), exactly.
+
+    Parameters
+    ----------
+    P : (k, 3) float
+    centres : (n, 3) float
+    radii : (n,) float
+
+    Returns
+    -------
+    (k,) float
+        Negative inside the union, zero on its boundary (model units).
+    """
+    out = np.empty(len(P))
+    for a in range(0, len(P), chunk):
+        d = np.linalg.norm(P[a:a + chunk, None, :] - centres[None], axis=2) - radii[None]
+        out[a:a + chunk] = d.min(axis=1)
+    return out
+
+
+def nearest_balls(X, S_d, R, clearance=None, margin=0.0):
+    """The balls of Eq. 10 for every vertex: the nearest one, and with a margin the nearest foreign one.
+
+    Parameters
+    ----------
+    X : (n, 3) float
+        Current mesh vertices.
+    S_d : (n, 3) float
+        Ball centres (the deformed skeletal mesh); ``R`` (n,) their radii.
+    clearance : callable, optional
+        ``clearance(i, j)`` -> rest clearances (k,) of vertices ``i`` from balls ``j``; needed when
+        ``margin > 0``.
+    margin : float
+        Balls clearer than this of the vertex at rest are *foreign*, inflated by ``margin`` (model units).
+
+    Returns
+    -------
+    near : tuple of (n,) float, (n,) int
+        ``|x_i - s_p| - R_p`` and ``p`` for the nearest non-foreign ball (all balls when ``margin = 0``:
+        S1's approximation of ``f(x_i)``).
+    foreign : tuple of (n,) float, (n,) int
+        The same for the nearest foreign ball, inflated; value ``inf`` where there is none.
+    """
+    neighbours = cKDTree(X).query_ball_point(X, R, return_sorted=False)
+    counts = np.fromiter(map(len, neighbours), dtype=np.int64, count=len(X))
+    i = np.repeat(np.arange(len(X)), counts)
+    j = np.concatenate(neighbours).astype(np.int64)
+    value = np.linalg.norm(X[i] - S_d[j], axis=1) - R[j]
+    foreign = clearance(i, j) > margin if margin > 0 else np.zeros(len(i), dtype=bool)
+    near = _row_minimum(np.where(foreign, np.inf, value), i, j, len(X))
+    return near, _row_minimum(np.where(foreign, value - margin, np.inf), i, j, len(X))
+
+
+def _row_minimum(value, i, j, n):
+    """Per row ``i`` (sorted, every row present) the smallest ``value`` and its ``j``."""
+    order = np.lexsort((value, i))
+    best = order[np.searchsorted(i[order], np.arange(n))]
+    return value[best], j[best]
+
+
+@dataclass
+class FlowResult:
+    """Outcome of :func:`medial_ball_flow`.
+
+    Attributes
+    ----------
+    X : (n, 3) float
+        Final positions.
+    intersecting : (k + 1,) int
+        Intersecting faces (new ones when reference pairs were given) before every iteration and after the last.
+    error : (k + 1,) float
+        ``sum_i |f(x_i)|`` (Eq. 10's approximation, model units) at the same moments.
+    step_seconds : (k,) float
+        Seconds of each flow step (without the intersection test).
+    seconds : float
+        Wall seconds in all.
+    """
+
+    X: np.ndarray
+    intersecting: np.ndarray
+    error: np.ndarray
+    step_seconds: np.ndarray
+    seconds: float
+
+    @property
+    def iterations(self):
+        return len(self.step_seconds)
+
+
+class MedialBallFlow:
+    """The flow of Eq. 9 towards the union of the balls ``(S_d, R)`` over a prefactorized ``(I + L)``.
+
+    Parameters
+    ----------
+    reconstruction : SkeletalReconstruction
+        Of the rest mesh: gives ``F``, ``R``, the rest positions (for the margin) and ``(I + L)^-1``.
+    S_d : (n, 3) float
+        Deformed skeletal mesh: the anchors and ball centres (never moved).
+    margin : float
+        Clearance kept between parts that were apart at rest (model units; 0 = S1's flow).
+    tau : float
+        Step size of Eq. 9.
+    """
+
+    def __init__(self, reconstruction, S_d, margin, tau=0.5):
+        self.rec, self.S_d, self.tau, self.margin = reconstruction, S_d, tau, margin
+
+    def _clearance(self, i, j):
+        rec = self.rec
+        return np.linalg.norm(rec.V[i] - rec.S[j], axis=1) - rec.R[j]
+
+    def _outward(self, X, p):
+        """Unit directions from the ball centres ``S_d[p]`` to ``X``, (n, 3)."""
+        d = X - self.S_d[p]
+        return d / np.maximum(np.linalg.norm(d, axis=1, keepdims=True), 1e-300)
+
+    def balls(self, X):
+        """Eq. 10 at ``X``: the nearest and the nearest foreign balls; see :func:`nearest_balls`."""
+        return nearest_balls(X, self.S_d, self.rec.R, self._clearance, self.margin)
+
+    def step(self, X, balls):
+        """One step of Eq. 9 from ``X`` with its :meth:`balls`: new positions (n, 3).
+
+        The speed is ``-g grad g - h grad h`` with ``g`` the nearest ball's value and ``h = min(0, .)`` the
+        nearest foreign ball's (0 without a margin).
+        """
+        (g, p), (h, q) = balls
+        h = np.minimum(np.where(np.isfinite(h), h, 0.0), 0.0)
+        speed = -g[:, None] * self._outward(X, p) - h[:, None] * self._outward(X, q)
+        return X + self.tau * self.rec.solve(speed)
+
+    def run(self, X, max_iters=50, reference_pairs=None, ftol=0.01):
+        """Flow from ``X`` until no (new) self-intersection remains and ``sum |f|`` stalls, or ``max_iters``.
+
+        Parameters
+        ----------
+        X : (n, 3) float
+            Start (the reconstructed or target pose).
+        max_iters : int
+        reference_pairs : (q, 2) int, optional
+            Intersecting face pairs that do not count (the reference's own).
+        ftol : float
+            Stop once intersection-free and ``sum |f|`` decreased by less than this fraction in a step.
+
+        Returns
+        -------
+        FlowResult
+        """
+        start = time.perf_counter()
+        balls = self.balls(X)
+        counts, errors, steps = [self._intersecting(X, reference_pairs)], [np.abs(balls[0][0]).sum()], []
+        for _ in range(max_iters):
+            if counts[-1] == 0 and len(errors) > 1 and errors[-1] >= (1.0 - ftol) * errors[-2]:
+                break
+            t0 = time.perf_counter()
+            X = self.step(X, balls)
+            balls = self.balls(X)
+            steps.append(time.perf_counter() - t0)
+            errors.append(np.abs(balls[0][0]).sum())
+            counts.append(self._intersecting(X, reference_pairs))
+            log.debug("flow %d: %d intersecting faces, sum|f| %.4g", len(steps), counts[-1], errors[-1])
+        result = FlowResult(X, np.array(counts), np.array(errors), np.array(steps), time.perf_counter() - start)
+        log.info("medial-ball flow: %d iterations, intersecting faces %d -> %d, sum|f| %.4g -> %.4g, %.2f s",
+                 result.iterations, counts[0], counts[-1], errors[0], errors[-1], result.seconds)
+        return result
+
+    def _intersecting(self, X, reference_pairs):
+        pairs = self_intersecting_pairs(X, self.rec.F)
+        if reference_pairs is not None:
+            pairs = new_pairs(pairs, reference_pairs)
+        return int(intersecting_faces(pairs, len(self.rec.F)).sum())
+
+
+def medial_ball_flow(reconstruction, X, S_d, margin, tau=0.5, max_iters=50, reference_pairs=None):
+    """One-off :meth:`MedialBallFlow.run`; returns a :class:`FlowResult`."""
+    return MedialBallFlow(reconstruction, S_d, margin, tau).run(X, max_iters, reference_pairs)

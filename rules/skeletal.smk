@@ -1,0 +1,32 @@
+# S1 pose authoring: a reference mesh and a rig file -> a pose library of <pose>-ssd, <pose>-variational and
+# <pose>-flow meshes (stages/skeletal_pose.py). Not part of `rule all`: run `snakemake author`, then repair the
+# result with `snakemake --config library=<skeletal_pose.out>/<rig name>`.
+
+AUTHOR = config["skeletal_pose"]
+AUTHOR_RIG = AUTHOR["rig"] or str(Path(workflow.basedir) / "rigs" / "demo-limb.yaml")
+AUTHOR_MESH = AUTHOR["mesh"] or f"{config['demo']['folder']}/{demo.REFERENCE_NAME}{demo.REFERENCE_SUFFIX}"
+AUTHOR_NAME = Path(AUTHOR_RIG).name.split(".")[0]
+AUTHORED = f"{config['results']}/authored/{AUTHOR_NAME}"
+
+
+rule author:
+    input:
+        mesh=AUTHOR_MESH,
+        rig=AUTHOR_RIG,
+    output:
+        library=directory(f"{AUTHOR['out']}/{AUTHOR_NAME}"),
+        artifact=f"{AUTHORED}/skeletal_pose.h5",
+    params:
+        python=PYTHON,
+        script=stage_script("skeletal_pose"),
+        options=" ".join(f"--{key.replace('_', '-')} {AUTHOR[key]}" for key in
+                         ("medial", "tol", "smooth_iters", "smooth_step", "falloff", "min_sine", "tau", "margin",
+                          "max_iters")),
+    threads: AUTHOR["threads"]
+    log:
+        f"{AUTHORED}/skeletal_pose.log",
+    benchmark:
+        f"{AUTHORED}/skeletal_pose.tsv"
+    shell:
+        "{params.python:q} {params.script:q} --mesh {input.mesh:q} --rig {input.rig:q} --out {output.library:q}"
+        " --artifact {output.artifact:q} --name {AUTHOR_NAME:q} {params.options} --threads {threads} --log {log:q}"

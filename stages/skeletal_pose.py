@@ -1,0 +1,132 @@
+"""Stage skeletal_pose: author a pose library from a reference mesh and a rig (S1: skeleton-driven deformation).
+
+Builds the skeletal mesh of the reference (medial balls, S1 §2), poses it with the rig's linear blend
+skinning, and writes every pose of the rig file in three variants (``<pose>-ssd``: skinning of the mesh;
+``<pose>-variational``: the reconstruction of S1 §3; ``<pose>-flow``: then the medial-ball flow of S1 §4)
+into one folder, with the reference, in the reference's file format, faces and vertex order: a pose
+library the repair workflow reads (``snakemake --config library=<folder>``). The artifact records the
+skeletal mesh, intersecting faces, S1's error sum |f| and seconds per pose and variant, and the flow's
+history.
+"""
+
+from pathlib import Path
+
+import posefix  # noqa: F401  (runtime defaults before numpy)
+
+import numpy as np
+
+from posefix.mesh.geometry import bbox_diagonal
+from posefix.mesh.intersections import intersecting_faces, self_intersecting_pairs
+from posefix.pipeline.artifacts import write_artifact
+from posefix.pipeline.cli import library_defaults, run_stage, stage_parser
+from posefix.pipeline.library import read_reference
+from posefix.pipeline.meshes import mesh_file, write_like
+from posefix.pipeline.rigs import read_rig
+from posefix.pipeline.timings import Timings
+from posefix.skeletal.authoring import VARIANTS, SkeletalPoser, union_error
+from posefix.skeletal.skeletal_mesh import skeletal_mesh
+
+DOCS = {
+    "skeleton/S": ("length", "skeletal mesh vertices (medial-ball centres), (n, 3) float64"),
+    "skeleton/R": ("length", "medial-ball radii |x - s|, (n,) float64"),
+    "skeleton/source": ("label", "which method gave each centre (see the stage log), (n,) int8"),
+    "skeleton/bad": ("bool", "centres still outside the surface or crossing it, (n,) bool"),
+    "intersecting": ("faces", "intersecting faces per pose and variant (ssd, variational, flow), (P, 3) int64"),
+    "error": ("length", "S1's error sum_i |f(x_i)| over the deformed balls, per pose and variant, (P, 3) float64"),
+    "seconds": ("s", "wall seconds per pose and variant (flow: without its reconstruction), (P, 3) float64"),
+}
+
+
+def build_parser():
+    parser = stage_parser("skeletal_pose", __doc__)
+    mesh_defaults, poser, flow = (library_defaults(f) for f in (skeletal_mesh, SkeletalPoser, SkeletalPoser.author))
+    parser.add_argument("--mesh", required=True, help="reference mesh (.obj/.ply/.off, optionally .gz)")
+    parser.add_argument("--rig", required=True, help="rig file (YAML: joints and poses, see rigs/demo-limb.yaml)")
+    parser.add_argument("--out", required=True, help="folder of the authored pose library")
+    parser.add_argument("--artifact", required=True, help="HDF5 file of the skeletal mesh and the metrics")
+    parser.add_argument("--name", default=None, help="library name: files <name>-reference.*; default the rig's")
+    parser.add_argument("--medial", choices=("poles", "shrinking_ball", "auto"), default=mesh_defaults["medial"],
+                        help="medial-ball centres: Voronoi poles (S1), shrinking balls, or poles with bad ones replaced")
+    parser.add_argument("--tol", type=float, default=mesh_defaults["tol"],
+                        help="a ball crossing the surface by more than tol x its radius counts as bad")
+    parser.add_argument("--smooth-iters", type=int, default=mesh_defaults["smooth_iters"],
+                        help="iterations of the gated bi-Laplacian flow on the skeletal mesh (S1 §2)")
+    parser.add_argument("--smooth-step", type=float, default=mesh_defaults["smooth_step"],
+                        help="step of that flow")
+    parser.add_argument("--falloff", type=float, default=poser["falloff"],
+                        help="skinning blend length / mean bone length")
+    parser.add_argument("--min-sine", type=float, default=poser["min_sine"],
+                        help="skeletal triangles with a smaller corner sine use the rig's rotation as frame")
+    parser.add_argument("--tau", type=float, default=flow["tau"], help="step size of the medial-ball flow (Eq. 9)")
+    parser.add_argument("--margin", type=float, default=0.01,
+                        help="flow margin / bbox diagonal between parts apart at rest (0 = S1's flow)")
+    parser.add_argument("--max-iters", type=int, default=flow["max_iters"], help="flow iterations at most")
+    return parser
+
+
+def main(args, log):
+    timings = Timings()
+    with timings.step("read"):
+        V, F = read_reference(args.mesh)
+        rig, poses = read_rig(args.rig)
+    name = args.name or Path(args.rig).name.split(".")[0]
+    log.info("%s: %d vertices, %d faces; rig %s: %d joints, %d poses", args.mesh, len(V), len(F), args.rig,
+             len(rig.names), len(poses))
+    with timings.step("skeleton"):
+        skeleton = skeletal_mesh(V, F, medial=args.medial, tol=args.tol, smooth_iters=args.smooth_iters,
+                                 smooth_step=args.smooth_step)
+    log.info("skeletal mesh (%s): %s", args.medial, skeleton.stats)
+    with timings.step("prepare"):
+        poser = SkeletalPoser(V, F, skeleton.S, rig, args.falloff, args.min_sine)
+    margin = bbox_diagonal(V) * args.margin
+    rows = [_author(poser, pose, pose_name, args, margin, timings, log) for pose_name, pose in poses.items()]
+    with timings.step("write"):
+        _write_library(args, name, V, F, poses, rows)
+        _write_artifact(args, skeleton, poses, rows, timings)
+
+
+def _author(poser, pose, pose_name, args, margin, timings, log):
+    """Author one pose: its variants' positions, metrics and the flow's history."""
+    with timings.step(f"pose {pose_name}"):
+        pose = poser.author(pose, margin, args.tau, args.max_iters)
+        F = poser.F
+        counts = [int(intersecting_faces(self_intersecting_pairs(pose.positions[v], F), len(F)).sum())
+                  for v in VARIANTS]
+        errors = [union_error(pose.positions[v], pose.S_d, poser.reconstruction.R) for v in VARIANTS]
+    log.info("%s: intersecting faces ssd %d, variational %d, flow %d (%d iterations); sum|f| %.4g, %.4g, %.4g",
+             pose_name, *counts, pose.flow.iterations, *errors)
+    return {"positions": pose.positions, "flow": pose.flow, "intersecting": counts, "error": errors,
+            "seconds": [pose.seconds[v] for v in VARIANTS]}
+
+
+def _write_library(args, name, V, F, poses, rows):
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    suffix = mesh_file(args.mesh).suffix
+    write_like(out / f"{name}-reference{suffix}", V, F, args.mesh)
+    for pose_name, row in zip(poses, rows):
+        for variant in VARIANTS:
+            write_like(out / f"{pose_name}-{variant}{suffix}", row["positions"][variant], F, args.mesh)
+
+
+def _write_artifact(args, skeleton, poses, rows, timings):
+    datasets = {
+        "skeleton/S": skeleton.S, "skeleton/R": skeleton.R,
+        "skeleton/source": np.asarray(skeleton.source, dtype=np.int8), "skeleton/bad": skeleton.bad,
+        "poses": np.array(list(poses)), "variants": np.array(VARIANTS),
+        "intersecting": np.array([r["intersecting"] for r in rows], dtype=np.int64),
+        "error": np.array([r["error"] for r in rows]), "seconds": np.array([r["seconds"] for r in rows]),
+    }
+    for pose_name, row in zip(poses, rows):
+        flow = row["flow"]
+        datasets[f"flow/{pose_name}/intersecting"] = flow.intersecting
+        datasets[f"flow/{pose_name}/error"] = flow.error
+        datasets[f"flow/{pose_name}/step_seconds"] = flow.step_seconds
+    params = {k: v for k, v in vars(args).items() if k not in ("log", "artifact", "threads")}
+    metrics = {f"skeleton_{k}": v for k, v in skeleton.stats.items() if np.isscalar(v)}
+    write_artifact(args.artifact, "skeletal_pose", datasets, params=params, inputs=[args.mesh, args.rig],
+                   timings=timings, metrics=metrics, docs=DOCS)
+
+
+if __name__ == "__main__":
+    run_stage(build_parser(), main)

@@ -1,0 +1,37 @@
+"""Bad medial centres: outside, crossing, non-finite; the exact capped surface distance."""
+
+import numpy as np
+
+from conftest import icosphere
+from posefix.mesh.geometry import point_triangle_distance
+from posefix.skeletal.quality import bad_centres, surface_distance_below
+
+
+def test_the_true_centre_of_a_sphere_is_good_outside_and_too_large_balls_are_bad():
+    V, F = icosphere(3)
+    S = np.array([[0.0, 0.0, 0.0], [1.5, 0.0, 0.0], [0.0, 0.0, 0.0], [0.2, 0.0, 0.0], [np.nan, 0, 0]])
+    R = np.array([1.0, 0.5, 3.0, 0.95, 1.0])
+    q = bad_centres(V, F, S, R, tol=0.05)
+    assert q.nonfinite.tolist() == [False, False, False, False, True]
+    assert q.outside.tolist() == [False, True, False, False, False]
+    assert q.crossing.tolist() == [False, False, True, True, False]
+    assert q.bad.tolist() == [False, True, True, True, True]
+    assert q.counts() == {"nonfinite": 1, "outside": 1, "crossing": 2, "bad": 4}
+    assert q.clearance[0] > 0.98 and abs(q.clearance[2] - q.clearance[0] / 3) < 1e-12
+
+
+def test_tolerance_decides_moderate_crossings():
+    V, F = icosphere(3)
+    S, R = np.zeros((1, 3)), np.array([1.5])  # clearance about 1 / 1.5
+    assert bad_centres(V, F, S, R, tol=0.2).crossing[0]
+    assert not bad_centres(V, F, S, R, tol=0.5).crossing[0]
+
+
+def test_surface_distance_is_exact_below_the_limit():
+    V, F = icosphere(2)
+    V = V * [1.0, 0.6, 0.3]
+    P = np.random.default_rng(0).uniform(-1.2, 1.2, size=(300, 3))
+    limit = np.random.default_rng(1).uniform(0.0, 0.8, size=len(P))
+    A, B, C = (np.repeat(V[F[:, i]][None], len(P), 0).reshape(-1, 3) for i in range(3))
+    brute = point_triangle_distance(np.repeat(P, len(F), 0), A, B, C).reshape(len(P), len(F)).min(1)
+    assert np.allclose(surface_distance_below(V, F, P, limit), np.minimum(brute, limit), atol=1e-12)
