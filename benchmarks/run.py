@@ -4,7 +4,8 @@ Libraries: lion, cat and horse poses from ../shared/data (the demo library when 
 absent, which the report says). Pieces: the self-intersection detector against pymeshlab
 (benchmarks/detector.py) on every key frame, the RBF fit variants on the first pose with the scipy
 peer check (benchmarks/fit.py), the OpenCL integration of every lion pose against numpy on two
-(benchmarks/integrate.py), and the repair and the downstream check (each library's summary.json). Everything is collected into
+(benchmarks/integrate.py), the repair and the downstream check (each library's summary.json), and S1's skeletal
+deformation next to S1 Fig. 12-13 (benchmarks/skeletal.py, which also runs alone). Everything is collected into
 ``BENCHMARKS.md`` and ``BENCHMARKS.json`` (plus ``blocked_vs_full.png``) next to the per-library
 pieces (``summary-<library>.md``: the library's per-pose summary); the same command on the same
 data gives the same tables, times aside.
@@ -190,6 +191,7 @@ def report(info, benchmarks, note, out):
     lines += ["## Self-intersection detector vs pymeshlab", "", *detector_table(benchmarks), "",
               "Ours is exact (filtered orient3d with an exact fallback); pymeshlab's is floating point. "
               "Per pose: `detector-<library>.md`.", ""]
+    lines += (out / "skeletal.md").read_text().splitlines() + [""]
     return "\n".join(lines)
 
 
@@ -206,6 +208,7 @@ def main():
     benchmarks = {(lib.name if lib else "demo"): bench_library(lib, out, str(args.cores)) for lib in libraries or [None]}
     info = machine()
     blocked_vs_full_figure(benchmarks).savefig(out / "blocked_vs_full.png", metadata={"Software": None})
+    run(sys.executable, ROOT / "benchmarks" / "skeletal.py", "--out", out, "--threads", args.cores)
     note += f" Wall time of the whole benchmark: {(time.perf_counter() - start) / 60:.1f} min."
     (out / "BENCHMARKS.md").write_text(report(info, benchmarks, note.strip(), out))
     (out / "BENCHMARKS.json").write_text(json.dumps({"machine": info, "libraries": benchmarks}, indent=1))

@@ -19,6 +19,7 @@ from posefix.mesh.geometry import bbox_diagonal
 from posefix.mesh.intersections import intersecting_faces, self_intersecting_pairs
 from posefix.pipeline.artifacts import write_artifact
 from posefix.pipeline.cli import library_defaults, run_stage, stage_parser
+from posefix.pipeline.errors import InputError
 from posefix.pipeline.library import read_reference
 from posefix.pipeline.meshes import mesh_file, write_like
 from posefix.pipeline.rigs import read_rig
@@ -46,7 +47,7 @@ def build_parser():
     parser.add_argument("--artifact", required=True, help="HDF5 file of the skeletal mesh and the metrics")
     parser.add_argument("--name", default=None, help="library name: files <name>-reference.*; default the rig's")
     parser.add_argument("--medial", choices=("poles", "shrinking_ball", "auto"), default=mesh_defaults["medial"],
-                        help="medial-ball centres: Voronoi poles (S1), shrinking balls, or poles with bad ones replaced")
+                        help="medial-ball centres: Voronoi poles (S1), shrinking balls, or poles, bad ones replaced")
     parser.add_argument("--tol", type=float, default=mesh_defaults["tol"],
                         help="a ball crossing the surface by more than tol x its radius counts as bad")
     parser.add_argument("--smooth-iters", type=int, default=mesh_defaults["smooth_iters"],
@@ -76,6 +77,9 @@ def main(args, log):
         skeleton = skeletal_mesh(V, F, medial=args.medial, tol=args.tol, smooth_iters=args.smooth_iters,
                                  smooth_step=args.smooth_step)
     log.info("skeletal mesh (%s): %s", args.medial, skeleton.stats)
+    missing = int((~np.isfinite(skeleton.S).all(axis=1)).sum())
+    if missing:
+        raise InputError(args.mesh, f"no medial ball for {missing} vertices with --medial {args.medial}; use auto")
     with timings.step("prepare"):
         poser = SkeletalPoser(V, F, skeleton.S, rig, args.falloff, args.min_sine)
     margin = bbox_diagonal(V) * args.margin

@@ -91,7 +91,8 @@ RELATIVE = {
     ("constraints", "tau"): [(spacetime_constraints, "tau")],
     ("fit", "eps_rel"): [(FitSettings, "eps")],
     ("integrate", "atol_rel"): [(rk45, "atol"), (rk45_opencl, "atol")],
-    ("skeletal_pose", "margin"): [(MedialBallFlow, "margin"), (medial_ball_flow, "margin"), (SkeletalPoser.author, "margin")],
+    ("skeletal_pose", "margin"): [(MedialBallFlow, "margin"), (medial_ball_flow, "margin"),
+                                  (SkeletalPoser.author, "margin")],
 }
 WORKFLOW_ONLY = {("demo", "folder"), ("classify", "exclude"), ("integrate", "device"), ("skeletal_pose", "rig"),
                  ("skeletal_pose", "mesh"), ("skeletal_pose", "out")} | {

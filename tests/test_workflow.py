@@ -219,3 +219,21 @@ def test_nested_config_overrides_reach_the_stages(tmp_path):
     assert "--alphas 0.5 --k-bend 1e-05,0.1" in proc.stdout + proc.stderr
     proc = snakemake(tmp_path, "-n", "--config", "classify={'exclude': {'demo-9': [1]}}")
     assert proc.returncode != 0 and "classify.exclude names pose(s) not in the library: demo-9" in proc.stderr
+
+
+def test_author_a_library_from_the_demo_rig_and_repair_it(tmp_path):
+    """`snakemake author` (S1: the demo rig -> <pose>-ssd/-variational/-flow), then the S0 repair of one of them."""
+    import json
+    proc = snakemake(tmp_path, "author", "--config", "skeletal_pose={'max_iters': 20}")
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    library = tmp_path / "data" / "authored" / "demo-limb"
+    names = sorted(p.name for p in library.iterdir() if not p.name.startswith("."))  # and .snakemake_timestamp
+    assert names[0] == "demo-01-flow.obj" and "demo-limb-reference.obj" in names and len(names) == 13
+    with h5py.File(tmp_path / "results" / "authored" / "demo-limb" / "skeletal_pose.h5", "r") as fh:
+        intersecting = fh["intersecting"][()]
+    assert intersecting.shape == (4, 3) and intersecting[1, 2] < intersecting[1, 1]  # demo-02: flow < variational
+    proc = snakemake(tmp_path, "--config", f"library={library}", "poses=demo-02-flow")
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    entry = json.loads((tmp_path / "reports" / "demo-limb" / "summary.json").read_text())["poses"][0]
+    assert entry["pose"] == "demo-02-flow" and entry["intersecting_faces"]["repaired_new"] == 0
+    assert (tmp_path / "results" / "demo-limb" / "repaired" / "demo-02-flow.obj").exists()

@@ -41,3 +41,10 @@ def test_laplacian_identities_on_a_sphere():
     # Dirichlet energy of a linear function = |tangential gradient|^2 integrated
     x = V[:, 0]
     assert np.isclose(x @ (L @ x), np.sum(face_areas(V, F) * np.sum((G @ x).reshape(-1, 3) ** 2, 1)))
+
+
+def test_uniform_laplacian_of_one_triangle_and_an_isolated_vertex():
+    from posefix.mesh.laplacian import uniform_laplacian
+    from posefix.mesh.topology import vertex_adjacency
+    L = uniform_laplacian(vertex_adjacency(np.array([[0, 1, 2]]), 4)).toarray()
+    assert np.allclose(L[:3, :3], [[-1, 0.5, 0.5], [0.5, -1, 0.5], [0.5, 0.5, -1]]) and not L[3].any()

@@ -26,6 +26,8 @@ def test_a_foreign_ball_is_reported_inflated_by_the_margin():
     S_d = np.array([[-1.0, 0, 0], [1.5, 0, 0], [6.0, 0, 0]])
     R = np.ones(3)
     clearance = lambda i, j: np.where(i == j, 0.0, 1.0)  # noqa: E731  every other ball was clear at rest
+    (g, p), (h, q) = nearest_balls(X, S_d, R, clearance, margin=0.0)
+    assert p.tolist() == [0, 1, 2] and np.allclose(g, 0.0) and np.isinf(h).all()  # S1: no foreign balls
     (g, p), (h, q) = nearest_balls(X, S_d, R, clearance, margin=0.1)
     assert p.tolist() == [0, 1, 2] and np.allclose(g, 0.0)
     assert q[:2].tolist() == [1, 0] and np.allclose(h[:2], 0.5 - 0.1) and np.isinf(h[2])  # 2: no neighbour
@@ -42,9 +44,24 @@ def test_the_flow_separates_two_interpenetrating_capsules_and_keeps_the_anchors(
     assert intersecting_faces(self_intersecting_pairs(X, F), len(F)).sum() > 100
     flow = MedialBallFlow(SkeletalReconstruction(V, F, skeleton.S), S_d, margin=0.01 * bbox_diagonal(V))
     result = flow.run(X, max_iters=50)
-    assert result.intersecting[0] > 100 and result.intersecting[-1] == 0
+    assert result.intersecting[0] > 100 and result.intersecting[result.best] == 0
     assert intersecting_faces(self_intersecting_pairs(result.X, F), len(F)).sum() == 0
     assert np.array_equal(S_d, anchors)
+
+
+def test_a_ball_that_held_a_vertex_at_rest_counts_with_that_penetration_subtracted():
+    X, S_d, R = np.array([[0.0, 0, 0], [-0.3, 0, 0]]), np.array([[-1.1, 0, 0], [1.7, 0, 0]]), np.array([1.0, 2.0])
+    clearance = lambda i, j: np.where(i == j, 0.0, -0.3)  # noqa: E731  each was 0.3 inside the other's ball
+    (g, p), _ = nearest_balls(X, S_d, R, clearance)
+    assert p.tolist() == [1, 1] and np.allclose(g, 0.0)  # vertex 0: own ball 0.1, ball 1 -0.3 + 0.3
+
+
+def test_the_rest_pose_is_a_fixed_point_of_the_flow_despite_overlapping_balls():
+    V, F = capsule(around=16, cap_rings=4, length_rings=20)
+    skeleton = skeletal_mesh(V, F)  # smoothed: some balls hold neighbouring vertices
+    assert union_of_balls(V, skeleton.S, skeleton.R).min() < -1e-4
+    result = MedialBallFlow(SkeletalReconstruction(V, F, skeleton.S), skeleton.S, margin=0.01).run(V, max_iters=3)
+    assert np.array_equal(result.X, V) and np.allclose(result.error, 0.0)
 
 
 @pytest.fixture(scope="module")
@@ -64,4 +81,4 @@ def test_errors_order_ssd_variational_flow_with_s1s_ratios(bent_ellipsoid):
     ssd, variational, flow = (union_error(pose.positions[v], pose.S_d, R) for v in ("ssd", "variational", "flow"))
     assert ssd > variational > flow
     assert variational / ssd <= 0.3 and flow / variational <= 0.1  # S1 Fig. 13: 3.8 / 20.2 = 0.19, 0.2 / 3.8 = 0.05
-    assert pose.flow.intersecting[-1] == 0
+    assert pose.flow.intersecting[pose.flow.best] == 0

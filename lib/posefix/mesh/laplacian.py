@@ -1,4 +1,4 @@
-"""Piecewise-linear differential operators on a triangle mesh: gradient, mass, cotangent Laplacian."""
+"""Differential operators on a triangle mesh: gradient, mass, cotangent Laplacian, the umbrella (graph) Laplacian."""
 
 import numpy as np
 import scipy.sparse as sp
@@ -49,3 +49,17 @@ def cotangent_laplacian(V, F):
     """
     G = gradient_operator(V, F)
     return (G.T @ face_mass(V, F) @ G).tocsc()
+
+
+def uniform_laplacian(A):
+    """Umbrella operator ``L s_i = mean of the neighbours' s - s_i``, (n, n) sparse csr.
+
+    Parameters
+    ----------
+    A : (n, n) sparse bool
+        Vertex adjacency (:func:`posefix.mesh.topology.vertex_adjacency`); isolated vertices get a
+        zero row.
+    """
+    degree = np.asarray(A.sum(axis=1)).ravel()
+    inv = np.where(degree > 0, 1.0 / np.maximum(degree, 1), 0.0)
+    return (sp.diags(inv) @ A.astype(np.float64) - sp.diags((degree > 0).astype(np.float64))).tocsr()

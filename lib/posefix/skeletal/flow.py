@@ -6,12 +6,17 @@ as fixed anchors, prefactorized by :class:`~posefix.skeletal.reconstruction.Skel
 ``F = -f grad f`` (the antigradient of f^2 / 2) from the nearest ball of Eq. 10: for vertex ``i`` the ball
 ``p`` minimising ``|x_i - s_p^d| - R_p`` over the vertices ``p`` within ``R_i`` of ``x_i`` (a kd-tree of the
 moving vertices, rebuilt every iteration). (Eq. 10 as printed drops the sign and the normalisation of
-``grad f``; we use the antigradient itself.)
+``grad f``; we use the antigradient itself.) A ball that already contained a vertex in the rest pose (its
+rest clearance ``c = |x_i - s_j| - R_j < 0``: the skeletal smoothing of S1 §2 and imperfect poles make some
+balls overlap neighbouring vertices) counts with that penetration subtracted, so that the rest pose is a
+fixed point of the flow; with empty balls (``c >= 0``) this is S1's flow exactly.
 
-Beyond S1, ``margin``: where two parts of the surface interpenetrate, both are pushed to the ridge of
-``f`` between them and would end up touching. A ball ``j`` that was at least ``margin`` away from vertex
-``i`` in the rest pose (``|x_i - s_j| - R_j``) is inflated by ``min(margin, that clearance)`` for ``i``, so
-the parts stop ``margin`` apart; neighbouring balls (clearance ~0) are not inflated. ``margin = 0`` is S1.
+Beyond S1, ``margin``: where two parts of the surface interpenetrate, S1's flow pushes both to the ridge
+of ``f`` between them, where they end up touching. With a margin, a ball ``j`` whose rest clearance
+``c`` from vertex ``i`` exceeds ``margin`` is *foreign* to ``i``: it pushes ``i`` out of
+itself inflated by ``min(margin, c - margin)`` (at rest every vertex is at least ``margin`` outside every
+inflated foreign ball), in a second term of the speed beside S1's nearest non-foreign ball, so the parts
+stop apart and slide along their own balls out of the other part. ``margin = 0`` is S1's flow.
 """
 
 import logging
@@ -47,7 +52,7 @@ def union_of_balls(P, centres, radii, chunk=2048):
     return out
 
 
-def nearest_balls(X, S_d, R, clearance=None, margin=0.0):
+def nearest_balls(X, S_d, R, clearance, margin=0.0):
     """The balls of Eq. 10 for every vertex: the nearest one, and with a margin the nearest foreign one.
 
     Parameters
@@ -56,17 +61,17 @@ def nearest_balls(X, S_d, R, clearance=None, margin=0.0):
         Current mesh vertices.
     S_d : (n, 3) float
         Ball centres (the deformed skeletal mesh); ``R`` (n,) their radii.
-    clearance : callable, optional
-        ``clearance(i, j)`` -> rest clearances (k,) of vertices ``i`` from balls ``j``; needed when
-        ``margin > 0``.
+    clearance : callable
+        ``clearance(i, j)`` -> rest clearances (k,) of vertices ``i`` from balls ``j`` (model units).
     margin : float
-        Balls clearer than this of the vertex at rest are *foreign*, inflated by ``margin`` (model units).
+        Balls clearer than this of the vertex at rest are *foreign*, inflated by ``min(margin, c - margin)``
+        (model units).
 
     Returns
     -------
     near : tuple of (n,) float, (n,) int
-        ``|x_i - s_p| - R_p`` and ``p`` for the nearest non-foreign ball (all balls when ``margin = 0``:
-        S1's approximation of ``f(x_i)``).
+        ``|x_i - s_p| - R_p - min(c, 0)`` and ``p`` for the nearest non-foreign ball (all balls when
+        ``margin = 0``: S1's approximation of ``f(x_i)``).
     foreign : tuple of (n,) float, (n,) int
         The same for the nearest foreign ball, inflated; value ``inf`` where there is none.
     """
@@ -75,16 +80,19 @@ def nearest_balls(X, S_d, R, clearance=None, margin=0.0):
     i = np.repeat(np.arange(len(X)), counts)
     j = np.concatenate(neighbours).astype(np.int64)
     value = np.linalg.norm(X[i] - S_d[j], axis=1) - R[j]
-    foreign = clearance(i, j) > margin if margin > 0 else np.zeros(len(i), dtype=bool)
-    near = _row_minimum(np.where(foreign, np.inf, value), i, j, len(X))
-    return near, _row_minimum(np.where(foreign, value - margin, np.inf), i, j, len(X))
+    c = clearance(i, j)
+    foreign = c > margin if margin > 0 else np.zeros(len(i), dtype=bool)
+    near = _row_minimum(np.where(foreign, np.inf, value - np.minimum(c, 0.0)), j, counts)
+    return near, _row_minimum(np.where(foreign, value - np.minimum(margin, c - margin), np.inf), j, counts)
 
 
-def _row_minimum(value, i, j, n):
-    """Per row ``i`` (sorted, every row present) the smallest ``value`` and its ``j``."""
-    order = np.lexsort((value, i))
-    best = order[np.searchsorted(i[order], np.arange(n))]
-    return value[best], j[best]
+def _row_minimum(value, j, counts):
+    """Per row of ``counts`` consecutive entries (every row non-empty): the smallest ``value`` and its ``j``."""
+    starts = np.cumsum(counts) - counts
+    smallest = np.minimum.reduceat(value, starts)
+    hits = np.flatnonzero(value == np.repeat(smallest, counts))
+    first = hits[np.searchsorted(hits, starts)]
+    return smallest, j[first]
 
 
 @dataclass
@@ -94,7 +102,9 @@ class FlowResult:
     Attributes
     ----------
     X : (n, 3) float
-        Final positions.
+        The best iterate: fewest intersecting faces, then smallest error.
+    best : int
+        Its iteration (0: the start).
     intersecting : (k + 1,) int
         Intersecting faces (new ones when reference pairs were given) before every iteration and after the last.
     error : (k + 1,) float
@@ -106,6 +116,7 @@ class FlowResult:
     """
 
     X: np.ndarray
+    best: int
     intersecting: np.ndarray
     error: np.ndarray
     step_seconds: np.ndarray
@@ -161,6 +172,9 @@ class MedialBallFlow:
     def run(self, X, max_iters=50, reference_pairs=None, ftol=0.01):
         """Flow from ``X`` until no (new) self-intersection remains and ``sum |f|`` stalls, or ``max_iters``.
 
+        The intersection count of the flow is not monotone where parts interpenetrate deeply; the result is
+        the best iterate (fewest intersecting faces, then smallest ``sum |f|``), not the last.
+
         Parameters
         ----------
         X : (n, 3) float
@@ -178,6 +192,7 @@ class MedialBallFlow:
         start = time.perf_counter()
         balls = self.balls(X)
         counts, errors, steps = [self._intersecting(X, reference_pairs)], [np.abs(balls[0][0]).sum()], []
+        best, X_best = 0, X
         for _ in range(max_iters):
             if counts[-1] == 0 and len(errors) > 1 and errors[-1] >= (1.0 - ftol) * errors[-2]:
                 break
@@ -188,9 +203,13 @@ class MedialBallFlow:
             errors.append(np.abs(balls[0][0]).sum())
             counts.append(self._intersecting(X, reference_pairs))
             log.debug("flow %d: %d intersecting faces, sum|f| %.4g", len(steps), counts[-1], errors[-1])
-        result = FlowResult(X, np.array(counts), np.array(errors), np.array(steps), time.perf_counter() - start)
-        log.info("medial-ball flow: %d iterations, intersecting faces %d -> %d, sum|f| %.4g -> %.4g, %.2f s",
-                 result.iterations, counts[0], counts[-1], errors[0], errors[-1], result.seconds)
+            if (counts[-1], errors[-1]) < (counts[best], errors[best]):
+                best, X_best = len(steps), X
+        result = FlowResult(X_best, best, np.array(counts), np.array(errors), np.array(steps),
+                            time.perf_counter() - start)
+        log.info("medial-ball flow: %d iterations, intersecting faces %d -> %d (best, iteration %d), sum|f| %.4g -> "
+                 "%.4g, %.2f s", result.iterations, counts[0], counts[best], best, errors[0], errors[best],
+                 result.seconds)
         return result
 
     def _intersecting(self, X, reference_pairs):

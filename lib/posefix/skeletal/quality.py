@@ -1,11 +1,10 @@
 """Which medial-ball centres are wrong: outside the surface, or with a ball that crosses it.
 
 A centre ``s_i`` with radius ``R_i`` of a medial ball must lie inside the solid (generalized winding
-number at least 0.5, so self-intersecting, open and non-manifold meshes are handled) and its ball
-must be empty: the distance from ``s_i`` to the surface is at least ``R_i`` (up to ``tol``), i.e. the
-ball is not larger than the local feature size. The distance is exact: a face within ``rho`` of
-``s`` has every corner within ``rho`` plus that corner's longest incident edge, so only the faces
-of those vertices (found with a k-d tree) are measured.
+number at least 0.5, so self-intersecting, open and non-manifold meshes are handled; by default its
+far-field approximation) and its ball must be empty: the distance from ``s_i`` to the surface is at
+least ``R_i`` (up to ``tol``), i.e. the ball is not larger than the local feature size. The distance
+is exact (:func:`surface_distance_below`), not to the faces around the nearest vertices only.
 """
 
 import itertools

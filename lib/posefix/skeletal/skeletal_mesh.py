@@ -22,9 +22,9 @@ import time
 from dataclasses import dataclass, field
 
 import numpy as np
-import scipy.sparse as sp
 
 from posefix.mesh.geometry import bbox_diagonal, vertex_normals
+from posefix.mesh.laplacian import uniform_laplacian
 from posefix.mesh.topology import vertex_adjacency
 from posefix.mesh.winding import winding_numbers
 from posefix.skeletal.poles import inner_poles
@@ -161,20 +161,6 @@ def ray_centres(V, F, X, N, r_max, tol):
     pick = np.where(ok, np.argmax(passing, axis=1), np.where(inside.any(axis=1), best, _HALVINGS))
     rows = np.arange(len(X))
     return X - r[rows, pick][:, None] * N, ~ok
-
-
-def uniform_laplacian(A):
-    """Umbrella operator ``L s_i = mean of the neighbours' s - s_i``, (n, n) sparse csr.
-
-    Parameters
-    ----------
-    A : (n, n) sparse bool
-        Vertex adjacency (:func:`posefix.mesh.topology.vertex_adjacency`); isolated vertices get a
-        zero row.
-    """
-    degree = np.asarray(A.sum(axis=1)).ravel()
-    inv = np.where(degree > 0, 1.0 / np.maximum(degree, 1), 0.0)
-    return (sp.diags(inv) @ A.astype(np.float64) - sp.diags((degree > 0).astype(np.float64))).tocsr()
 
 
 def gated_bilaplacian_flow(S, X, A, iters, step):
