@@ -20,8 +20,8 @@ rule author:
         python=PYTHON,
         script=stage_script("skeletal_pose"),
         options=" ".join(f"--{key.replace('_', '-')} {AUTHOR[key]}" for key in
-                         ("medial", "tol", "smooth_iters", "smooth_step", "falloff", "min_sine", "tau", "margin",
-                          "max_iters")),
+                         ("medial", "tol", "smooth_iters", "smooth_step", "falloff", "min_sine", "min_area", "tau",
+                          "margin", "max_iters")),
     threads: AUTHOR["threads"]
     log:
         f"{AUTHORED}/skeletal_pose.log",

@@ -58,6 +58,8 @@ def build_parser():
                         help="skinning blend length / mean bone length")
     parser.add_argument("--min-sine", type=float, default=poser["min_sine"],
                         help="skeletal triangles with a smaller corner sine use the rig's rotation as frame")
+    parser.add_argument("--min-area", type=float, default=poser["min_area"],
+                        help="so do skeletal triangles smaller than this x their mesh triangle (collapsed skeleton)")
     parser.add_argument("--tau", type=float, default=flow["tau"], help="step size of the medial-ball flow (Eq. 9)")
     parser.add_argument("--margin", type=float, default=0.01,
                         help="flow margin / bbox diagonal between parts apart at rest (0 = S1's flow)")
@@ -81,7 +83,7 @@ def main(args, log):
     if missing:
         raise InputError(args.mesh, f"no medial ball for {missing} vertices with --medial {args.medial}; use auto")
     with timings.step("prepare"):
-        poser = SkeletalPoser(V, F, skeleton.S, rig, args.falloff, args.min_sine)
+        poser = SkeletalPoser(V, F, skeleton.S, rig, args.falloff, args.min_sine, args.min_area)
     margin = bbox_diagonal(V) * args.margin
     rows = [_author(poser, pose, pose_name, args, margin, timings, log) for pose_name, pose in poses.items()]
     with timings.step("write"):

@@ -22,7 +22,7 @@ from posefix.pipeline.demo import demo_library
 from posefix.repair.sequence import RepairSettings
 from posefix.skeletal.authoring import SkeletalPoser
 from posefix.skeletal.flow import MedialBallFlow, medial_ball_flow
-from posefix.skeletal.reconstruction import frame_maps
+from posefix.skeletal.reconstruction import SkeletalReconstruction, collapsed_faces, frame_maps
 from posefix.skeletal.rig import skinning_weights
 from posefix.skeletal.skeletal_mesh import skeletal_mesh
 from posefix.spacetime.classification import constraint_mask
@@ -79,6 +79,8 @@ LIBRARY = {
     ("skeletal_pose", "smooth_step"): [(skeletal_mesh, "smooth_step", None)],
     ("skeletal_pose", "falloff"): [(SkeletalPoser, "falloff", None), (skinning_weights, "falloff", None)],
     ("skeletal_pose", "min_sine"): [(SkeletalPoser, "min_sine", None), (frame_maps, "min_sine", None)],
+    ("skeletal_pose", "min_area"): [(SkeletalPoser, "min_area", None), (SkeletalReconstruction, "min_area", None),
+                                    (collapsed_faces, "min_area", None)],
     ("skeletal_pose", "tau"): [(SkeletalPoser.author, "tau", None), (MedialBallFlow, "tau", None),
                                (medial_ball_flow, "tau", None)],
     ("skeletal_pose", "max_iters"): [(SkeletalPoser.author, "max_iters", None), (MedialBallFlow.run, "max_iters", None),

@@ -6,8 +6,8 @@ import pytest
 from conftest import icosphere
 from posefix.mesh.geometry import bbox_diagonal
 from posefix.mesh.rotations import rotation_exp
-from posefix.skeletal.reconstruction import (SkeletalReconstruction, corner_cotangents, frame_maps,
-                                             triangle_frames)
+from posefix.skeletal.reconstruction import (SkeletalReconstruction, collapsed_faces, corner_cotangents,
+                                             frame_maps, triangle_frames)
 from posefix.skeletal.skeletal_mesh import skeletal_mesh
 
 
@@ -32,6 +32,12 @@ def test_frames_of_a_triangle_and_a_degenerate_one_take_the_fallback():
     fallback = np.repeat(np.eye(3)[None] * 7.0, 2, axis=0)
     A, degenerate = frame_maps(S, S @ Q.T, F, fallback)
     assert degenerate.tolist() == [False, True] and np.allclose(A[0], Q) and np.allclose(A[1], 7.0 * np.eye(3))
+
+
+def test_a_skeleton_collapsed_to_a_point_is_collapsed_everywhere_and_the_mesh_itself_nowhere(ellipsoid):
+    V, F, S = ellipsoid
+    assert collapsed_faces(V, 0.01 * V, F).all() and not collapsed_faces(V, V, F).any()
+    assert collapsed_faces(V, S, F).mean() < 0.1  # an ellipsoid's skeletal sheet keeps its triangles' areas
 
 
 def test_the_rest_skeleton_returns_the_mesh(ellipsoid):

@@ -38,13 +38,15 @@ class SkeletalPoser:
         Skinning blend length relative to the mean bone length (:func:`~posefix.skeletal.rig.skinning_weights`).
     min_sine : float
         Skeletal triangles with a smaller corner sine take the rig's blended rotation as frame map.
+    min_area : float
+        So do those smaller than this x their mesh triangle (a collapsed skeleton, S1 §5).
     """
 
-    def __init__(self, V, F, S, rig, falloff=0.2, min_sine=0.05):
+    def __init__(self, V, F, S, rig, falloff=0.2, min_sine=0.05, min_area=0.1):
         self.V, self.F, self.S, self.rig, self.min_sine = V, F, S, rig, min_sine
         self.weights_S = skinning_weights(rig, S, falloff)
         self.weights_V = skinning_weights(rig, V, falloff)
-        self.reconstruction = SkeletalReconstruction(V, F, S)
+        self.reconstruction = SkeletalReconstruction(V, F, S, min_area)
 
     def ssd(self, pose):
         """Linear blend skinning of the mesh: (n, 3) float."""

@@ -8,8 +8,9 @@ mesh solves ``(I + L) x^d = y~`` (Eq. 5) with ``L`` the cotangent Laplacian of `
 ``cot a + cot b``) and ``y~`` the graph Laplacian of the fragments plus their mean per vertex: with the rest
 skeleton the fragments are ``M``'s own triangles and ``x^d = x``.
 
-Where a skeletal triangle is degenerate (a skeleton that collapses to a curve, as on a capsule, S1 §5),
-its frame is undefined; :func:`frame_maps` then takes a caller-supplied map (the rig's blended rotation).
+Where a skeletal triangle is degenerate or collapsed (a skeleton that degenerates to a curve, as on a
+capsule, S1 §5), its frame is undefined or noise; :func:`frame_maps` then takes a caller-supplied map
+(the rig's blended rotation).
 """
 
 import logging
@@ -18,6 +19,7 @@ import time
 import numpy as np
 import scipy.sparse as sp
 
+from posefix.mesh.geometry import face_areas
 from posefix.mesh.laplacian import cotangent_laplacian
 from posefix.mesh.sparse import factorized
 
@@ -48,7 +50,27 @@ def triangle_frames(S, F):
     return np.stack([v, t1, t2], axis=2), sine
 
 
-def frame_maps(S, S_d, F, fallback, min_sine=0.05, min_edge=1e-3):
+def collapsed_faces(V, S, F, min_area=0.1):
+    """Faces where the skeletal mesh collapsed: skeletal triangle area below ``min_area`` x the mesh triangle's.
+
+    On a canal surface (a tube) the skeleton is a curve (S1 §5): the poles of a ring crowd on the axis and
+    their triangles' frames are noise. A proper skeletal sheet keeps areas of the mesh's order (an
+    ellipsoid's median ratio is 0.56, the demo limb's 0.024).
+
+    Parameters
+    ----------
+    V, S : (n, 3) float
+        Mesh and skeletal mesh.
+    F : (m, 3) int
+
+    Returns
+    -------
+    (m,) bool
+    """
+    return face_areas(S, F) < min_area * face_areas(V, F)
+
+
+def frame_maps(S, S_d, F, fallback, min_sine=0.05, min_edge=1e-3, collapsed=None):
     """Local transforms ``A_T = B_d B_0^-1`` of the skeletal triangles (S1 §3, Fig. 5).
 
     Parameters
@@ -57,11 +79,13 @@ def frame_maps(S, S_d, F, fallback, min_sine=0.05, min_edge=1e-3):
         Rest and deformed skeletal mesh.
     F : (m, 3) int
     fallback : (m, 3, 3) float
-        Used where either frame is degenerate (sine below ``min_sine``).
+        Used where either frame is degenerate (sine below ``min_sine``, a too short edge) or ``collapsed``.
     min_sine : float
         Smallest ``|t1 x t2|`` of a usable frame.
     min_edge : float
         Shortest usable edge relative to the mean edge of ``S`` (shorter edges have unreliable directions).
+    collapsed : (m,) bool, optional
+        Faces that take the fallback in any case (:func:`collapsed_faces`).
 
     Returns
     -------
@@ -73,6 +97,8 @@ def frame_maps(S, S_d, F, fallback, min_sine=0.05, min_edge=1e-3):
     edges = [np.linalg.norm(X[F[:, 1:]] - X[F[:, :1]], axis=2).min(axis=1) for X in (S, S_d)]
     shortest = min_edge * np.linalg.norm(S[F[:, 1]] - S[F[:, 0]], axis=1).mean()
     degenerate = (s0 < min_sine) | (sd < min_sine) | (edges[0] < shortest) | (edges[1] < shortest)
+    if collapsed is not None:
+        degenerate |= collapsed
     A = np.array(fallback, dtype=float, copy=True)
     good = ~degenerate
     A[good] = Bd[good] @ np.linalg.inv(B0[good])
@@ -98,6 +124,9 @@ class SkeletalReconstruction:
     F : (m, 3) int
     S : (n, 3) float
         Its skeletal mesh; radii ``R = |V - S|``.
+    min_area : float
+        Faces whose skeletal triangle is smaller than this x theirs take the fallback frame
+        (:func:`collapsed_faces`).
 
     Examples
     --------
@@ -105,9 +134,10 @@ class SkeletalReconstruction:
     >>> X = rec.reconstruct(S_d, fallback_maps)           # doctest: +SKIP
     """
 
-    def __init__(self, V, F, S):
+    def __init__(self, V, F, S, min_area=0.1):
         start = time.perf_counter()
         self.V, self.F, self.S = V, F, S
+        self.collapsed = collapsed_faces(V, S, F, min_area)
         self.R = np.linalg.norm(V - S, axis=1)
         self.radial = (V - S) / np.where(self.R > 0, self.R, 1.0)[:, None]
         self.cot = corner_cotangents(V, F)
@@ -140,11 +170,11 @@ class SkeletalReconstruction:
 
     def reconstruct(self, S_d, fallback, min_sine=0.05):
         """The deformed mesh ``x^d`` for the deformed skeleton ``S_d`` (n, 3); see :func:`frame_maps`."""
-        maps, degenerate = frame_maps(self.S, S_d, self.F, fallback, min_sine)
+        maps, degenerate = frame_maps(self.S, S_d, self.F, fallback, min_sine, collapsed=self.collapsed)
         log.debug("%d of %d skeletal triangles degenerate (fallback maps)", degenerate.sum(), len(self.F))
         return self.solve(self.right_hand_side(self.fragments(S_d, maps)))
 
 
-def reconstruct(V, F, S, S_d, fallback, min_sine=0.05):
+def reconstruct(V, F, S, S_d, fallback, min_sine=0.05, min_area=0.1):
     """One-off :meth:`SkeletalReconstruction.reconstruct`: the deformed mesh (n, 3) for ``S_d``."""
-    return SkeletalReconstruction(V, F, S).reconstruct(S_d, fallback, min_sine)
+    return SkeletalReconstruction(V, F, S, min_area).reconstruct(S_d, fallback, min_sine)
