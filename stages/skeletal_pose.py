@@ -78,7 +78,6 @@ def main(args, log):
     with timings.step("skeleton"):
         skeleton = skeletal_mesh(V, F, medial=args.medial, tol=args.tol, smooth_iters=args.smooth_iters,
                                  smooth_step=args.smooth_step)
-    log.info("skeletal mesh (%s): %s", args.medial, skeleton.stats)
     missing = int((~np.isfinite(skeleton.S).all(axis=1)).sum())
     if missing:
         raise InputError(args.mesh, f"no medial ball for {missing} vertices with --medial {args.medial}; use auto")
@@ -94,15 +93,15 @@ def main(args, log):
 def _author(poser, pose, pose_name, args, margin, timings, log):
     """Author one pose: its variants' positions, metrics and the flow's history."""
     with timings.step(f"pose {pose_name}"):
-        pose = poser.author(pose, margin, args.tau, args.max_iters)
-        F = poser.F
-        counts = [int(intersecting_faces(self_intersecting_pairs(pose.positions[v], F), len(F)).sum())
-                  for v in VARIANTS]
-        errors = [union_error(pose.positions[v], pose.S_d, poser.reconstruction.R) for v in VARIANTS]
+        authored = poser.author(pose, margin, args.tau, args.max_iters)
+        F, flow = poser.F, authored.flow
+        ssd = int(intersecting_faces(self_intersecting_pairs(authored.positions["ssd"], F), len(F)).sum())
+        counts = [ssd, int(flow.intersecting[0]), int(flow.intersecting[flow.best])]  # the flow counted the others
+        errors = [union_error(authored.positions[v], authored.S_d, poser.reconstruction.R) for v in VARIANTS]
     log.info("%s: intersecting faces ssd %d, variational %d, flow %d (%d iterations); sum|f| %.4g, %.4g, %.4g",
-             pose_name, *counts, pose.flow.iterations, *errors)
-    return {"positions": pose.positions, "flow": pose.flow, "intersecting": counts, "error": errors,
-            "seconds": [pose.seconds[v] for v in VARIANTS]}
+             pose_name, *counts, flow.iterations, *errors)
+    return {"positions": authored.positions, "flow": flow, "intersecting": counts, "error": errors,
+            "seconds": [authored.seconds[v] for v in VARIANTS]}
 
 
 def _write_library(args, name, V, F, poses, rows):
