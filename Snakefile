@@ -5,6 +5,7 @@
 #   downstream (Gauss-Newton check of original vs repaired pose, S0 §5, with its figure);
 #   then summary and overview over all poses. `snakemake --report reports/<library>/report.html`
 #   collects the report() outputs (captions in rules/captions/).
+# Beside it, `snakemake author` (rules/skeletal.smk, S1) authors a pose library from a rig file.
 # Rules (rules/<topic>.smk) only wire stage scripts (stages/<rule>.py); the math is in lib/posefix/.
 from snakemake.utils import min_version
 

@@ -31,7 +31,8 @@ def _typed(value):
     return value
 
 
-for _section in ("demo", "keyframes", "classify", "constraints", "fit", "integrate", "verify", "downstream", "skeletal_pose"):
+for _section in ("demo", "keyframes", "classify", "constraints", "fit", "integrate", "verify", "downstream",
+                 "skeletal_pose"):
     if isinstance(config.get(_section), dict):
         config[_section] = _typed(config[_section])
 validate(config, "../schemas/config.schema.yaml")
