@@ -32,7 +32,8 @@ from posefix.skeletal.skeletal_mesh import skeletal_mesh
 ROOT = Path(__file__).resolve().parents[1]
 DATA = Path(os.environ.get("POSEFIX_DATA", ROOT.parent / "shared" / "data"))
 S1 = {"ssd": (20.2, 2.3), "variational": (3.8, 2.9), "flow": (0.2, None)}  # Fig. 13: eps, seconds (P4 1.7 GHz)
-MARGIN = yaml.safe_load((ROOT / "config.yaml").read_text())["skeletal_pose"]["margin"]
+CONFIG = yaml.safe_load((ROOT / "config.yaml").read_text())["skeletal_pose"]
+MARGIN, NEIGHBOURS = CONFIG["margin"], CONFIG["neighbours"]
 REFERENCES = {"lion": "lion-poses/lion-reference.obj", "cat": "cat-poses/cat-reference.obj",
               "horse": "horse-poses/horse-reference.obj", "camel": "camel-poses/camel-reference.obj.gz",
               "kids": "kids-0001/0001.null.0.off.gz"}
@@ -58,8 +59,8 @@ def bent_ellipsoid(subdivisions, margin_rel):
     t3 = time.perf_counter()
     X_var, S_d = poser.variational(pose)
     t4 = time.perf_counter()
-    flows = {name: MedialBallFlow(poser.reconstruction, S_d, margin=m * bbox_diagonal(V)).run(X_var)
-             for name, m in (("flow_s1", 0.0), ("flow", margin_rel))}
+    flows = {name: MedialBallFlow(poser.reconstruction, S_d, margin=m * bbox_diagonal(V), neighbours=k).run(X_var)
+             for name, m, k in (("flow_s1", 0.0, 0), ("flow", margin_rel, NEIGHBOURS))}
     row = {"triangles": len(F), "skeleton_s": t1 - t0, "prepare_s": t2 - t1}
     seconds = {"ssd": t3 - t2, "variational": t4 - t3 + t2 - t1}
     for name, X in (("ssd", X_ssd), ("variational", X_var), *((k, f.X) for k, f in flows.items())):
@@ -82,7 +83,8 @@ def demo_rows(margin_rel):
     rows = {}
     for name, pose in poses.items():
         authored = poser.author(pose, margin=margin_rel * bbox_diagonal(V))
-        s1 = MedialBallFlow(poser.reconstruction, authored.S_d, margin=0.0).run(authored.positions["variational"])
+        s1 = MedialBallFlow(poser.reconstruction, authored.S_d, margin=0.0, neighbours=0).run(
+            authored.positions["variational"])
         flow = authored.flow
         rows[name] = {"lbs_target": count(targets[name]), "ssd": count(authored.positions["ssd"]),
                       "variational": count(authored.positions["variational"]), "flow_s1": int(s1.intersecting[s1.best]),
@@ -111,8 +113,8 @@ def markdown(result):
              "pose and return their best iterate (fewest intersecting faces, then smallest error).", "",
              "| method | error (ours) | error (S1) | ratio (ours) | ratio (S1) | seconds (ours) "
              "| seconds (S1, P4 1.7 GHz) | intersecting faces |", "|---|---:|---:|---:|---:|---:|---:|---:|"]
-    labels = {"ssd": "SSD", "variational": "variational (S1 §3)", "flow_s1": "+ S1 flow (margin 0)",
-              "flow": f"+ flow (margin {MARGIN} d, default)"}
+    labels = {"ssd": "SSD", "variational": "variational (S1 §3)", "flow_s1": "+ S1 flow (margin 0, all candidates)",
+              "flow": f"+ flow (margin {MARGIN} d, {NEIGHBOURS} candidates: default)"}
     s1 = {"ssd": S1["ssd"], "variational": S1["variational"], "flow_s1": S1["flow"], "flow": (None, None)}
     for key, label in labels.items():
         ours, (s1_error, s1_seconds) = e20[key], s1[key]
@@ -128,13 +130,14 @@ def markdown(result):
                   f"{e20['flow_s1']['best']}), the default {e20['flow']['iterations']} (best {e20['flow']['best']}), "
                   "with the exact intersection test after each.", "",
               f"Flow at {e5['triangles']} triangles (S1: 4.9k, 0.16 s per iteration; bar 0.05 s): "
-              f"**{e5['flow_s1']['step_s']:.3f} s per step** for S1's flow, {e5['flow']['step_s']:.3f} s with the "
-              "margin (Eq. 9-10: kd-tree, nearest balls, solve); with the exact intersection test "
+              f"**{e5['flow_s1']['step_s']:.3f} s per step** for S1's flow, {e5['flow']['step_s']:.3f} s for the "
+              "default (Eq. 9-10: kd-tree, nearest balls, solve); with the exact intersection test "
               f"{e5['flow_s1']['iteration_s']:.3f} and {e5['flow']['iteration_s']:.3f} s per iteration. At "
               f"{e20['triangles']} triangles: {e20['flow_s1']['step_s']:.3f} and {e20['flow']['step_s']:.3f} s per "
-              "step (Eq. 10's candidates, the vertices within R_i, grow with the square of the resolution).", "",
+              f"step: S1's candidates (all vertices within R_i) grow with the square of the resolution, the "
+              f"default keeps the nearest {NEIGHBOURS}.", "",
               "### Demo limb authored from rigs/demo-limb.yaml: intersecting faces", "",
-              "| pose | LBS (demo target) | SSD (our weights) | variational | + S1 flow (margin 0) "
+              "| pose | LBS (demo target) | SSD (our weights) | variational | + S1 flow (margin 0, all candidates) "
               "| + flow (default margin) | flow s |", "|---|---:|---:|---:|---:|---:|---:|"]
     for name, r in result["demo"].items():
         lines.append(f"| {name} | {r['lbs_target']} | {r['ssd']} | {r['variational']} | {r['flow_s1']} | "

@@ -21,7 +21,7 @@ rule author:
         script=stage_script("skeletal_pose"),
         options=" ".join(f"--{key.replace('_', '-')} {AUTHOR[key]}" for key in
                          ("medial", "tol", "smooth_iters", "smooth_step", "falloff", "min_sine", "min_area", "tau",
-                          "margin", "max_iters")),
+                          "margin", "neighbours", "max_iters")),
     threads: AUTHOR["threads"]
     log:
         f"{AUTHORED}/skeletal_pose.log",

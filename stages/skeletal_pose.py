@@ -63,6 +63,8 @@ def build_parser():
     parser.add_argument("--tau", type=float, default=flow["tau"], help="step size of the medial-ball flow (Eq. 9)")
     parser.add_argument("--margin", type=float, default=0.01,
                         help="flow margin / bbox diagonal between parts apart at rest (0 = S1's flow)")
+    parser.add_argument("--neighbours", type=int, default=flow["neighbours"],
+                        help="candidate balls per vertex at most in the flow (0: all within R_i, S1)")
     parser.add_argument("--max-iters", type=int, default=flow["max_iters"], help="flow iterations at most")
     return parser
 
@@ -93,7 +95,7 @@ def main(args, log):
 def _author(poser, pose, pose_name, args, margin, timings, log):
     """Author one pose: its variants' positions, metrics and the flow's history."""
     with timings.step(f"pose {pose_name}"):
-        authored = poser.author(pose, margin, args.tau, args.max_iters)
+        authored = poser.author(pose, margin, args.tau, args.neighbours, args.max_iters)
         F, flow = poser.F, authored.flow
         ssd = int(intersecting_faces(self_intersecting_pairs(authored.positions["ssd"], F), len(F)).sum())
         counts = [ssd, int(flow.intersecting[0]), int(flow.intersecting[flow.best])]  # the flow counted the others

@@ -21,7 +21,7 @@ from posefix.mesh.contacts import contact_vertices
 from posefix.pipeline.demo import demo_library
 from posefix.repair.sequence import RepairSettings
 from posefix.skeletal.authoring import SkeletalPoser
-from posefix.skeletal.flow import MedialBallFlow, medial_ball_flow
+from posefix.skeletal.flow import MedialBallFlow, candidate_balls, medial_ball_flow, nearest_balls
 from posefix.skeletal.reconstruction import SkeletalReconstruction, collapsed_faces, frame_maps
 from posefix.skeletal.rig import skinning_weights
 from posefix.skeletal.skeletal_mesh import skeletal_mesh
@@ -83,6 +83,9 @@ LIBRARY = {
                                     (collapsed_faces, "min_area", None)],
     ("skeletal_pose", "tau"): [(SkeletalPoser.author, "tau", None), (MedialBallFlow, "tau", None),
                                (medial_ball_flow, "tau", None)],
+    ("skeletal_pose", "neighbours"): [(SkeletalPoser.author, "neighbours", None), (MedialBallFlow, "neighbours", None),
+                                      (medial_ball_flow, "neighbours", None), (nearest_balls, "neighbours", None),
+                                      (candidate_balls, "neighbours", None)],
     ("skeletal_pose", "max_iters"): [(SkeletalPoser.author, "max_iters", None), (MedialBallFlow.run, "max_iters", None),
                                      (medial_ball_flow, "max_iters", None)],
 }

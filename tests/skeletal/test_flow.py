@@ -9,7 +9,7 @@ from posefix.mesh.geometry import bbox_diagonal
 from posefix.mesh.intersections import intersecting_faces, self_intersecting_pairs
 from posefix.mesh.primitives import capsule
 from posefix.skeletal.authoring import SkeletalPoser, union_error
-from posefix.skeletal.flow import MedialBallFlow, nearest_balls, union_of_balls
+from posefix.skeletal.flow import MedialBallFlow, candidate_balls, nearest_balls, union_of_balls
 from posefix.skeletal.reconstruction import SkeletalReconstruction
 from posefix.skeletal.rig import Rig, pose_from_rotation_vectors
 from posefix.skeletal.skeletal_mesh import skeletal_mesh
@@ -82,3 +82,13 @@ def test_errors_order_ssd_variational_flow_with_s1s_ratios(bent_ellipsoid):
     assert ssd > variational > flow
     assert variational / ssd <= 0.3 and flow / variational <= 0.1  # S1 Fig. 13: 3.8 / 20.2 = 0.19, 0.2 / 3.8 = 0.05
     assert pose.flow.intersecting[pose.flow.best] == 0
+
+
+def test_candidates_are_the_vertices_within_each_radius_or_the_nearest_of_them():
+    X = np.column_stack([np.arange(6.0), np.zeros(6), np.zeros(6)])
+    R = np.full(6, 1.5)
+    j, counts = candidate_balls(X, R, neighbours=0)
+    rows = np.split(j, np.cumsum(counts)[:-1])
+    assert [sorted(r.tolist()) for r in rows] == [[0, 1], [0, 1, 2], [1, 2, 3], [2, 3, 4], [3, 4, 5], [4, 5]]
+    j, counts = candidate_balls(X, R, neighbours=2)
+    assert counts.tolist() == [2] * 6 and j[::2].tolist() == list(range(6))  # itself first, then one neighbour

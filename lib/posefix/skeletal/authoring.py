@@ -68,7 +68,7 @@ class SkeletalPoser:
         S_d, fallback = self.skeleton(pose)
         return self.reconstruction.reconstruct(S_d, fallback, self.min_sine), S_d
 
-    def author(self, pose, margin, tau=0.5, max_iters=50):
+    def author(self, pose, margin, tau=0.5, neighbours=64, max_iters=50):
         """All :data:`VARIANTS` of ``pose``.
 
         Parameters
@@ -78,6 +78,8 @@ class SkeletalPoser:
             The flow's margin (model units; see :mod:`posefix.skeletal.flow`).
         tau : float
             The flow's step size.
+        neighbours : int
+            The flow's candidate balls per vertex at most (0: all, S1).
         max_iters : int
             The flow's iterations at most.
 
@@ -90,7 +92,7 @@ class SkeletalPoser:
         t1 = time.perf_counter()
         X_var, S_d = self.variational(pose)
         t2 = time.perf_counter()
-        flow = MedialBallFlow(self.reconstruction, S_d, margin, tau).run(X_var, max_iters)
+        flow = MedialBallFlow(self.reconstruction, S_d, margin, tau, neighbours).run(X_var, max_iters)
         seconds = {"ssd": t1 - t0, "variational": t2 - t1, "flow": time.perf_counter() - t2}
         return AuthoredPose({"ssd": X_ssd, "variational": X_var, "flow": flow.X}, S_d, flow, seconds)
 

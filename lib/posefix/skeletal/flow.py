@@ -52,7 +52,35 @@ def union_of_balls(P, centres, radii, chunk=2048):
     return out
 
 
-def nearest_balls(X, S_d, R, clearance, margin=0.0):
+def candidate_balls(X, R, neighbours=64):
+    """Eq. 10's candidates: for every vertex ``i`` the vertices ``j`` with ``|x_j - x_i| <= R_i``.
+
+    Parameters
+    ----------
+    X : (n, 3) float
+    R : (n,) float
+    neighbours : int
+        Keep only the nearest this many of them: bounded work and memory where balls hold many vertices
+        (their number grows with the square of the resolution); 0: all of them (S1).
+
+    Returns
+    -------
+    j : (k,) int64
+        Candidates, grouped by vertex in vertex order (each vertex is its own candidate).
+    counts : (n,) int64
+        Candidates per vertex (at least 1).
+    """
+    tree = cKDTree(X)
+    if not neighbours:
+        lists = tree.query_ball_point(X, R, return_sorted=False)
+        counts = np.fromiter(map(len, lists), dtype=np.int64, count=len(X))
+        return np.concatenate(lists).astype(np.int64), counts
+    distance, j = tree.query(X, k=min(neighbours, len(X)), distance_upper_bound=float(R.max()))
+    keep = distance.reshape(len(X), -1) <= R[:, None]
+    return j.reshape(len(X), -1)[keep].astype(np.int64), keep.sum(axis=1)
+
+
+def nearest_balls(X, S_d, R, clearance, margin=0.0, neighbours=64):
     """The balls of Eq. 10 for every vertex: the nearest one, and with a margin the nearest foreign one.
 
     Parameters
@@ -66,6 +94,8 @@ def nearest_balls(X, S_d, R, clearance, margin=0.0):
     margin : float
         Balls clearer than this of the vertex at rest are *foreign*, inflated by ``min(margin, c - margin)``
         (model units).
+    neighbours : int
+        Candidates per vertex at most (:func:`candidate_balls`; 0: all).
 
     Returns
     -------
@@ -75,10 +105,8 @@ def nearest_balls(X, S_d, R, clearance, margin=0.0):
     foreign : tuple of (n,) float, (n,) int
         The same for the nearest foreign ball, inflated; value ``inf`` where there is none.
     """
-    neighbours = cKDTree(X).query_ball_point(X, R, return_sorted=False)
-    counts = np.fromiter(map(len, neighbours), dtype=np.int64, count=len(X))
+    j, counts = candidate_balls(X, R, neighbours)
     i = np.repeat(np.arange(len(X)), counts)
-    j = np.concatenate(neighbours).astype(np.int64)
     value = np.linalg.norm(X[i] - S_d[j], axis=1) - R[j]
     c = clearance(i, j)
     foreign = c > margin if margin > 0 else np.zeros(len(i), dtype=bool)
@@ -140,10 +168,12 @@ class MedialBallFlow:
         Clearance kept between parts that were apart at rest (model units; 0 = S1's flow).
     tau : float
         Step size of Eq. 9.
+    neighbours : int
+        Eq. 10's candidates per vertex at most (:func:`candidate_balls`); 0: all within ``R_i`` (S1).
     """
 
-    def __init__(self, reconstruction, S_d, margin, tau=0.5):
-        self.rec, self.S_d, self.tau, self.margin = reconstruction, S_d, tau, margin
+    def __init__(self, reconstruction, S_d, margin, tau=0.5, neighbours=64):
+        self.rec, self.S_d, self.tau, self.margin, self.neighbours = reconstruction, S_d, tau, margin, neighbours
 
     def _clearance(self, i, j):
         rec = self.rec
@@ -156,7 +186,7 @@ class MedialBallFlow:
 
     def balls(self, X):
         """Eq. 10 at ``X``: the nearest and the nearest foreign balls; see :func:`nearest_balls`."""
-        return nearest_balls(X, self.S_d, self.rec.R, self._clearance, self.margin)
+        return nearest_balls(X, self.S_d, self.rec.R, self._clearance, self.margin, self.neighbours)
 
     def step(self, X, balls):
         """One step of Eq. 9 from ``X`` with its :meth:`balls`: new positions (n, 3).
@@ -219,6 +249,6 @@ class MedialBallFlow:
         return int(intersecting_faces(pairs, len(self.rec.F)).sum())
 
 
-def medial_ball_flow(reconstruction, X, S_d, margin, tau=0.5, max_iters=50, reference_pairs=None):
+def medial_ball_flow(reconstruction, X, S_d, margin, tau=0.5, neighbours=64, max_iters=50, reference_pairs=None):
     """One-off :meth:`MedialBallFlow.run`; returns a :class:`FlowResult`."""
-    return MedialBallFlow(reconstruction, S_d, margin, tau).run(X, max_iters, reference_pairs)
+    return MedialBallFlow(reconstruction, S_d, margin, tau, neighbours).run(X, max_iters, reference_pairs)
