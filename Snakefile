@@ -3,7 +3,8 @@
 #   demo (only without --config library=...) -> validate -> keyframes -> classify -> constraints
 #   -> fit -> integrate -> verify -> export (the repaired mesh), render (report figures) and
 #   downstream (Gauss-Newton check of original vs repaired pose, S0 §5, with its figure);
-#   then summary and overview over all poses. `snakemake --report reports/<library>/report.html`
+#   then summary and overview over all poses. Beside S0, per pose, the baseline repairs of config
+#   `baselines` (rules/baselines.smk: skeleton -> repair_medial -> export_medial, S1's medial balls). `snakemake --report reports/<library>/report.html`
 #   collects the report() outputs (captions in rules/captions/).
 # Beside it, `snakemake author` (rules/skeletal.smk, S1) authors a pose library from a rig file.
 # Rules (rules/<topic>.smk) only wire stage scripts (stages/<rule>.py); the math is in lib/posefix/.
@@ -21,6 +22,7 @@ include: "rules/spacetime.smk"
 include: "rules/repair.smk"
 include: "rules/check.smk"
 include: "rules/report.smk"
+include: "rules/baselines.smk"
 include: "rules/skeletal.smk"
 
 

@@ -1,10 +1,16 @@
 # Per pose: the downstream Gauss-Newton discrete-shell check (S0 §5, posefix.check), parallel to
-# export and render, so it adds no level to the per-pose chain.
+# export and render, so it adds no level to the per-pose chain. With downstream.baselines, also
+# towards the baseline repairs' poses (config baselines).
+CHECK_BASELINES = config["downstream"]["baselines"]
+
 
 rule downstream:
     input:
         keyframes=rules.keyframes.output[0],
         verify=rules.verify.output[0],
+        baselines=lambda wildcards: (
+            list(baseline_artifacts(wildcards.pose).values()) if CHECK_BASELINES else []
+        ),
     output:
         h5=f"{RESULTS}/{{pose}}/downstream.h5",
         png=report(
@@ -21,6 +27,9 @@ rule downstream:
         max_iters=config["downstream"]["max_iters"],
         rel_tol=config["downstream"]["rel_tol"],
         stall_iters=config["downstream"]["stall_iters"],
+        baselines=lambda wildcards: (
+            named_options("--baseline", baseline_artifacts(wildcards.pose)) if CHECK_BASELINES else ""
+        ),
         python=PYTHON,
         script=stage_script("downstream"),
     threads: config["downstream"]["threads"]
@@ -32,4 +41,5 @@ rule downstream:
         "{params.python:q} {params.script:q} --keyframes {input.keyframes:q} --verify {input.verify:q}"
         " --alphas {params.alphas} --k-bend {params.k_bend} --k-stretch {params.k_stretch}"
         " --max-iters {params.max_iters} --rel-tol {params.rel_tol} --stall-iters {params.stall_iters}"
-        " --threads {threads} --out {output.h5:q} --png {output.png:q} --pose {wildcards.pose:q} --log {log:q}"
+        " {params.baselines} --threads {threads} --out {output.h5:q} --png {output.png:q} --pose {wildcards.pose:q}"
+        " --log {log:q}"

@@ -8,6 +8,7 @@ import yaml
 from snakemake.utils import validate
 
 from posefix.pipeline import demo
+from posefix.pipeline.cli import named_options
 from posefix.pipeline.errors import InputError
 from posefix.pipeline.library import Library, discover_library
 from posefix.pipeline.meshes import mesh_file
@@ -32,9 +33,12 @@ def _typed(value):
 
 
 for _section in ("demo", "keyframes", "classify", "constraints", "fit", "integrate", "verify", "downstream",
-                 "skeletal_pose"):
+                 "skeletal_pose", "repair_medial"):
     if isinstance(config.get(_section), dict):
         config[_section] = _typed(config[_section])
+if isinstance(config.get("baselines"), str):  # --config baselines=medial, baselines=[] or baselines=a,b
+    _value = config["baselines"].strip()
+    config["baselines"] = yaml.safe_load(_value) if _value.startswith("[") else [b for b in _value.split(",") if b]
 validate(config, "../schemas/config.schema.yaml")
 
 PYTHON = sys.executable  # the interpreter running snakemake: the venv's under `make run`
@@ -84,6 +88,17 @@ if _unknown:
 RESULTS = f"{config['results']}/{LIBRARY.name}"
 REPORTS = f"{config['reports']}/{LIBRARY.name}"
 IS_DEMO = config["library"] is None
+BASELINES = config["baselines"]  # repairs beside S0, compared in the report
+
+
+def baseline_artifacts(pose):
+    """The artifacts of the baseline repairs of ``pose``: {name: results/<library>/<pose>/<name>.h5}."""
+    return {name: f"{RESULTS}/{pose}/{name}.h5" for name in BASELINES}
+
+
+def baseline_repaired_file(name, pose):
+    """Output path of a baseline's repaired mesh: results/<library>/repaired-<name>/<pose><input suffix>."""
+    return f"{RESULTS}/repaired-{name}/{pose}{LIBRARY.pose(pose).suffix}"
 
 
 def pose_file(wildcards):
@@ -145,6 +160,7 @@ def get_final_output():
     """The targets of the workflow: every repaired pose, the report figures, the summary and the overview."""
     return [
         *[repaired_file(p) for p in POSES],
+        *[baseline_repaired_file(b, p) for b in BASELINES for p in POSES],
         *expand(f"{REPORTS}/figures/{{pose}}/{{figure}}.png", pose=POSES, figure=list(POSE_FIGURES)),
         *expand(f"{REPORTS}/figures/{{pose}}/downstream.png", pose=POSES),
         f"{REPORTS}/summary.json",

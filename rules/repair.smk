@@ -52,5 +52,5 @@ rule export:
     benchmark:
         f"{RESULTS}/benchmarks/{{pose}}/export{{suffix}}.tsv"
     shell:
-        "{params.python:q} {params.script:q} --verify {input.verify:q} --target {input.target:q}"
+        "{params.python:q} {params.script:q} --artifact {input.verify:q} --target {input.target:q}"
         " --out {output:q} --log {log:q}"

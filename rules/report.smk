@@ -1,10 +1,13 @@
-# Reports: the summary of a library, the figures per pose and the overview (posefix.report). Captions
-# of the report() outputs are in rules/captions/.
+# Reports: the summary of a library, the figures per pose and the overview (posefix.report), S0
+# compared with the baseline repairs of config baselines. Captions of the report() outputs are in
+# rules/captions/.
 
 rule summary:
     input:
         verify=expand(f"{RESULTS}/{{pose}}/verify.h5", pose=POSES),
         downstream=expand(f"{RESULTS}/{{pose}}/downstream.h5", pose=POSES),
+        classify=expand(f"{RESULTS}/{{pose}}/classify.h5", pose=POSES),  # V_C of the baselines' deviations
+        baselines=[path for p in POSES for path in baseline_artifacts(p).values()],
         meshes=[repaired_file(p) for p in POSES],
     output:
         json=f"{REPORTS}/summary.json",
@@ -12,6 +15,7 @@ rule summary:
     params:
         results=lambda wildcards, input: os.path.dirname(os.path.dirname(input.verify[0])),
         poses=",".join(POSES),
+        baselines=f"--baselines {','.join(BASELINES)}" if BASELINES else "",
         python=PYTHON,
         script=stage_script("summary"),
     threads: 1
@@ -19,7 +23,7 @@ rule summary:
         f"{RESULTS}/logs/summary.log",
     shell:
         "{params.python:q} {params.script:q} --results {params.results:q} --poses {params.poses:q}"
-        " --out {output.json:q} --markdown {output.md:q} --log {log:q}"
+        " {params.baselines} --out {output.json:q} --markdown {output.md:q} --log {log:q}"
 
 
 rule render:
@@ -29,11 +33,13 @@ rule render:
         fit=rules.fit.output[0],
         verify=rules.verify.output[0],
         benchmarks=[f"{RESULTS}/benchmarks/{{pose}}/{stage}.tsv" for stage in TIMED_STAGES],
+        baselines=lambda wildcards: list(baseline_artifacts(wildcards.pose).values()),
     output:
         [pose_figure(figure) for figure in POSE_FIGURES],
     params:
         folder=lambda wildcards, output: os.path.dirname(output[0]),
         benchmarks=lambda wildcards, input: os.path.dirname(input.benchmarks[0]),
+        baselines=lambda wildcards: named_options("--baseline", baseline_artifacts(wildcards.pose)),
         python=PYTHON,
         script=stage_script("render"),
     threads: 1
@@ -44,7 +50,7 @@ rule render:
     shell:
         "{params.python:q} {params.script:q} --keyframes {input.keyframes:q} --classify {input.classify:q}"
         " --fit {input.fit:q} --verify {input.verify:q} --benchmarks {params.benchmarks:q}"
-        " --pose {wildcards.pose:q} --out {params.folder:q} --log {log:q}"
+        " {params.baselines} --pose {wildcards.pose:q} --out {params.folder:q} --log {log:q}"
 
 
 rule overview:

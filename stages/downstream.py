@@ -4,16 +4,17 @@ Runs the example-driven discrete-shell deformation (Fröhlich & Botsch 2011; Gau
 ``posefix.check``) from the reference towards the original target and towards the repaired pose,
 for every stiffness k_b in ``--k-bend`` and weight alpha in ``--alphas`` (a grid: single settings
 are fragile). The same three far-apart handle vertices are pinned at their linear blend in every
-run. Writes per-run iterations, convergence, stop reason and the error after every iteration, and
-(``--png``) a figure of the energy per iteration (``posefix.report.figures.downstream_history``).
+run; every ``--baseline`` repair is a further example, checked over the same grid. Writes per-run
+iterations, convergence, stop reason and the error after every iteration, and (``--png``) a figure
+of the energy per iteration (``posefix.report.figures.downstream_history``).
 """
 
 import posefix  # noqa: F401  (runtime defaults before numpy)
 
 from posefix.check.downstream import downstream_check
 from posefix.check.gauss_newton import STOP_REASONS, SolverSettings
-from posefix.pipeline.artifacts import read_artifact, write_artifact
-from posefix.pipeline.cli import float_list, library_defaults, run_stage, stage_parser
+from posefix.pipeline.artifacts import read_artifact, read_baseline, write_artifact
+from posefix.pipeline.cli import float_list, library_defaults, named_path, run_stage, stage_parser
 from posefix.pipeline.files import write_figure
 from posefix.pipeline.timings import Timings
 from posefix.report import figures
@@ -21,7 +22,9 @@ from posefix.report import figures
 DOCS = {
     "alpha": ("1", "interpolation weight of the run's targets, (R,) float64"),
     "k_bend": ("1", "bending stiffness k_b of the run, (R,) float64"),
-    "example": ("index", "example of the run: 0 original target, 1 repaired pose, (R,) uint8"),
+    "example": ("index", "example of the run: 0 original target, 1 repaired pose, 2... the baselines (examples), "
+                         "(R,) uint8"),
+    "examples": ("name", "name of each example code: original, repaired, then the baselines, (E,) str"),
     "iterations": ("count", "accepted Gauss-Newton steps, (R,) int64"),
     "converged": ("bool", "energy zero, or a full step accepted with |J^T r| reduced 1e4-fold, (R,) bool"),
     "reason": ("index", "stop reason: " + ", ".join(f"{i} {r}" for i, r in enumerate(STOP_REASONS)) + ", (R,) uint8"),
@@ -44,6 +47,9 @@ def build_parser():
     parser.add_argument("--out", required=True, help="downstream.h5 to write")
     parser.add_argument("--png", default=None, help="also draw the energy per iteration of every run into this PNG")
     parser.add_argument("--pose", default="", help="pose name (figure title)")
+    parser.add_argument("--baseline", type=named_path, action="append", default=[], metavar="NAME=PATH",
+                        help="a baseline repair's artifact (e.g. medial=<pose>/medial.h5): also deform towards its "
+                        "repaired pose; repeatable")
     parser.add_argument("--alphas", type=float_list, default=list(grid["alphas"]),
                         help="interpolation weights, e.g. 0.5,1.0")
     parser.add_argument("--k-bend", type=float_list, default=list(grid["k_bend"]),
@@ -62,14 +68,18 @@ def main(args, log):
     with timings.step("read"):
         kf, _ = read_artifact(args.keyframes, "keyframes", ["reference", "target", "faces"])
         ve, _ = read_artifact(args.verify, "verify", ["repaired"])
+        examples = {"original": kf["target"], "repaired": ve["repaired"]}
+        examples |= {name: read_baseline(path, name, ["repaired"])[0]["repaired"] for name, path in args.baseline}
     settings = SolverSettings(max_iters=args.max_iters, rel_tol=args.rel_tol, stall_iters=args.stall_iters)
     with timings.step("solve"):
-        check = downstream_check(kf["reference"], kf["faces"], {"original": kf["target"], "repaired": ve["repaired"]},
-                                 args.alphas, args.k_bend, args.k_stretch, settings)
+        check = downstream_check(kf["reference"], kf["faces"], examples, args.alphas, args.k_bend, args.k_stretch,
+                                 settings)
     write_artifact(args.out, "downstream", check.datasets(),
                    params={"alphas": args.alphas, "k_bend": args.k_bend, "k_stretch": args.k_stretch,
-                           "max_iters": args.max_iters, "rel_tol": args.rel_tol, "stall_iters": args.stall_iters},
-                   inputs=[args.keyframes, args.verify], timings=timings, metrics=check.metrics(), docs=DOCS)
+                           "max_iters": args.max_iters, "rel_tol": args.rel_tol, "stall_iters": args.stall_iters,
+                           "baselines": [name for name, _ in args.baseline]},
+                   inputs=[args.keyframes, args.verify, *(path for _, path in args.baseline)], timings=timings,
+                   metrics=check.metrics(), docs=DOCS)
     if args.png:
         title = f"{args.pose}: Gauss-Newton discrete shells"
         write_figure(args.png, figures.downstream_history(check.curves(), title=title))

@@ -1,4 +1,4 @@
-"""Stage export: write the repaired pose in the target's own file format.
+"""Stage export: write the repaired pose (S0's, or a baseline repair's) in the target's own file format.
 
 Same format and compression as the target file, identical faces and vertex order; for OBJ the
 target's text is kept line by line except for the vertex (and per-vertex normal) lines (see
@@ -17,7 +17,9 @@ from posefix.pipeline.timings import Timings
 
 def build_parser():
     parser = stage_parser("export", __doc__)
-    parser.add_argument("--verify", required=True, help="verify.h5 of the pose (repaired positions)")
+    parser.add_argument("--artifact", required=True, help="verify.h5 (S0) or a baseline's artifact of the pose")
+    parser.add_argument("--stage", default="verify", choices=("verify", "repair_medial"),
+                        help="the stage that wrote --artifact: its dataset 'repaired' is written")
     parser.add_argument("--target", required=True, help="the target mesh file (its format is reproduced)")
     parser.add_argument("--out", required=True, help="repaired mesh file (same extension as --target)")
     return parser
@@ -26,7 +28,7 @@ def build_parser():
 def main(args, log):
     timings = Timings()
     with timings.step("read"):
-        data, _ = read_artifact(args.verify, "verify", ["repaired"])
+        data, _ = read_artifact(args.artifact, args.stage, ["repaired"])
         V_tgt, F = read_mesh(args.target)
     X = data["repaired"]
     if X.shape != V_tgt.shape:

@@ -1,6 +1,7 @@
 """Stage render: the report figures of one pose (PNG, offscreen).
 
-Writes into ``--out``: ``renders.png`` (target vs repaired, intersecting faces highlighted),
+Writes into ``--out``: ``renders.png`` (target vs repaired, and every ``--baseline`` repair beside
+them, intersecting faces highlighted),
 ``deviation.png`` (deviation heat map on the repaired pose with a colour bar, fallback regions),
 ``classification.png`` (intersecting faces per key frame before and after, ``V_C`` on the
 reference), ``fit.png`` (fit history: error, condition, seconds per iteration) and
@@ -13,9 +14,9 @@ from pathlib import Path
 
 import posefix  # noqa: F401  (runtime defaults before numpy)
 
-from posefix.mesh.intersections import intersecting_faces
-from posefix.pipeline.artifacts import read_artifact
-from posefix.pipeline.cli import run_stage, stage_parser
+from posefix.mesh.intersections import intersecting_faces, self_intersecting_pairs
+from posefix.pipeline.artifacts import read_artifact, read_baseline
+from posefix.pipeline.cli import named_path, run_stage, stage_parser
 from posefix.pipeline.files import write_figure
 from posefix.pipeline.timings import Timings, benchmark_seconds
 from posefix.report import figures
@@ -35,6 +36,9 @@ def build_parser():
     parser.add_argument("--benchmarks", required=True, help="folder of the pose's Snakemake benchmark files")
     parser.add_argument("--pose", required=True, help="pose name (figure titles)")
     parser.add_argument("--out", required=True, help="folder to write the PNG files into")
+    parser.add_argument("--baseline", type=named_path, action="append", default=[], metavar="NAME=PATH",
+                        help="a baseline repair's artifact (e.g. medial=<pose>/medial.h5), drawn beside the repaired "
+                        "pose in renders.png; repeatable")
     return parser
 
 
@@ -45,16 +49,19 @@ def main(args, log):
         cl, _ = read_artifact(args.classify, "classify", ["mask", "pairs", "pair_offsets", "intersecting_faces"])
         fi, fattrs = read_artifact(args.fit, "fit", [f"history/{k}" for k in HISTORY])
         ve, _ = read_artifact(args.verify, "verify", ["repaired", "deviation", "replaced", "pairs", "new_faces"])
+        compared = {name: read_baseline(path, name, ["repaired"])[0]["repaired"] for name, path in args.baseline}
     V_ref, V_tgt, F = kf["reference"], kf["target"], kf["faces"]
     m = len(F)
     frame_pairs = split_frames(cl["pairs"], cl["pair_offsets"])
     reference_faces, target_faces = intersecting_faces(frame_pairs[0], m), intersecting_faces(frame_pairs[-1], m)
     repaired_faces = intersecting_faces(ve["pairs"], m)
+    with timings.step("intersections"):
+        baselines = {name: (X, intersecting_faces(self_intersecting_pairs(X, F), m)) for name, X in compared.items()}
     R = camera(V_ref)
     made = {}
     with timings.step("figures"):
         made["renders"] = figures.renders(V_tgt, ve["repaired"], F, R, target_faces, repaired_faces, reference_faces,
-                                          title=args.pose)
+                                          title=args.pose, baselines=baselines)
         made["deviation"] = figures.deviation_map(ve["repaired"], F, R, ve["deviation"], ve["replaced"],
                                                   title=args.pose)
         made["classification"] = figures.classification(

@@ -2,7 +2,9 @@
 
 Reads the metrics of every pose's artifacts (``results/<library>/<pose>/*.h5``) and the Snakemake
 benchmark files, and writes ``reports/<library>/summary.json`` (schema in docs/artifacts.md) and
-``summary.md`` (``posefix.report.summary``).
+``summary.md`` (``posefix.report.summary``). With ``--baselines``, every pose's entry also compares
+the baseline repairs (``<pose>/<name>.h5``): their intersections, and their deviation from the
+target over S0's ``V_C`` (``classify.h5``) and the rest, measured as S0's.
 """
 
 import json
@@ -10,11 +12,13 @@ from pathlib import Path
 
 import posefix  # noqa: F401  (runtime defaults before numpy)
 
-from posefix.pipeline.artifacts import read_artifact
+from posefix.pipeline.artifacts import read_artifact, read_baseline
 from posefix.pipeline.cli import run_stage, stage_parser
+from posefix.pipeline.errors import InputError
 from posefix.pipeline.files import atomic_write_bytes
 from posefix.pipeline.timings import benchmark_seconds
-from posefix.report.summary import DOWNSTREAM_DATASETS, SUMMARY_STAGES, pose_entry, summary_markdown
+from posefix.repair.deviation import deviation
+from posefix.report.summary import DOWNSTREAM_DATASETS, SUMMARY_STAGES, baseline_entry, pose_entry, summary_markdown
 
 METRICS = ("keyframes", "constraints", "fit", "integrate", "verify")
 
@@ -25,21 +29,43 @@ def build_parser():
     parser.add_argument("--poses", required=True, help="comma-separated pose names")
     parser.add_argument("--out", required=True, help="summary.json to write")
     parser.add_argument("--markdown", required=True, help="summary.md to write")
+    parser.add_argument("--baselines", default="",
+                        help="comma-separated baseline repairs to compare (their <pose>/<name>.h5), e.g. medial")
     return parser
 
 
-def summarize_pose(results, pose):
-    """The summary entry of one pose, from its artifacts and benchmark files."""
+def summarize_pose(results, pose, baselines=()):
+    """The summary entry of one pose, from its artifacts and benchmark files, with the ``baselines`` (names)."""
     folder = Path(results) / pose
     metrics = {stage: read_artifact(folder / f"{stage}.h5", stage, [])[1]["metrics"] for stage in METRICS}
     downstream, _ = read_artifact(folder / "downstream.h5", "downstream", list(DOWNSTREAM_DATASETS))
     seconds = {stage: benchmark_seconds(Path(results) / "benchmarks" / pose, stage) for stage in SUMMARY_STAGES}
-    return pose_entry(pose, metrics, downstream, seconds)
+    compared = {}
+    if baselines:
+        mask = read_artifact(folder / "classify.h5", "classify", ["mask"])[0]["mask"].astype(bool)
+        d = float(metrics["keyframes"]["bbox_diagonal"])
+        compared = {name: summarize_baseline(folder / f"{name}.h5", name, mask, d, downstream) for name in baselines}
+        for name, entry in compared.items():  # wall seconds of the stage, as S0's (the artifact's: in-process)
+            wall = benchmark_seconds(Path(results) / "benchmarks" / pose, f"repair_{name}")
+            entry["seconds"] = entry["seconds"] if wall is None else wall
+    return pose_entry(pose, metrics, downstream, seconds, compared)
+
+
+def summarize_baseline(path, name, mask, d, downstream):
+    """``baselines.<name>`` of a pose's entry: the artifact's metrics, the deviation of its repaired pose from
+    its start (the target) over ``mask`` (V_C) and the rest relative to ``d``, the downstream runs towards it."""
+    data, attrs = read_baseline(path, name, ["start", "repaired"])
+    if not data["start"].shape == data["repaired"].shape == (len(mask), 3):
+        raise InputError(path, f"start {data['start'].shape} and repaired {data['repaired'].shape} are not "
+                               f"({len(mask)}, 3) like the pose")
+    _, summary = deviation(data["repaired"], data["start"], mask, d)
+    return baseline_entry(name, attrs["metrics"], summary, downstream)
 
 
 def main(args, log):
     poses = [p for p in args.poses.split(",") if p]
-    entries = [summarize_pose(args.results, pose) for pose in poses]
+    baselines = [b for b in args.baselines.split(",") if b]
+    entries = [summarize_pose(args.results, pose, baselines) for pose in poses]
     library = Path(args.results).name
     atomic_write_bytes(args.out, json.dumps({"library": library, "poses": entries}, indent=1).encode())
     atomic_write_bytes(args.markdown, summary_markdown(library, entries).encode())
@@ -47,6 +73,10 @@ def main(args, log):
         log.info("%s: new intersecting faces %d, deviation V_C mean %.2g max %.2g, %.1f s", e["pose"],
                  e["intersecting_faces"]["repaired_new"], e["deviation"]["constrained_mean"],
                  e["deviation"]["constrained_max"], e["seconds_total"])
+        for name, b in e.get("baselines", {}).items():
+            log.info("%s, %s: new intersecting faces %d, deviation V_C mean %.2g max %.2g, %.1f s", e["pose"], name,
+                     b["intersecting_faces"]["repaired_new"], b["deviation"]["constrained_mean"],
+                     b["deviation"]["constrained_max"], b["seconds"])
 
 
 if __name__ == "__main__":

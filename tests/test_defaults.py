@@ -23,6 +23,7 @@ from posefix.repair.sequence import RepairSettings
 from posefix.skeletal.authoring import SkeletalPoser
 from posefix.skeletal.flow import MedialBallFlow, candidate_balls, medial_ball_flow, nearest_balls
 from posefix.skeletal.reconstruction import SkeletalReconstruction, collapsed_faces, frame_maps
+from posefix.skeletal.repair import MedialRepair, medial_repair
 from posefix.skeletal.rig import skinning_weights
 from posefix.skeletal.skeletal_mesh import skeletal_mesh
 from posefix.spacetime.classification import constraint_mask
@@ -88,6 +89,9 @@ LIBRARY = {
                                       (candidate_balls, "neighbours", None)],
     ("skeletal_pose", "max_iters"): [(SkeletalPoser.author, "max_iters", None), (MedialBallFlow.run, "max_iters", None),
                                      (medial_ball_flow, "max_iters", None)],
+    **{("repair_medial", key): [(MedialRepair, key, None), (medial_repair, key, None)]
+       for key in ("tau", "neighbours", "max_reach")},
+    ("repair_medial", "max_iters"): [(MedialRepair.repair, "max_iters", None), (medial_repair, "max_iters", None)],
 }
 # relative to the bbox diagonal in the config, lengths in the library: the library has no default
 RELATIVE = {
@@ -98,9 +102,10 @@ RELATIVE = {
     ("integrate", "atol_rel"): [(rk45, "atol"), (rk45_opencl, "atol")],
     ("skeletal_pose", "margin"): [(MedialBallFlow, "margin"), (medial_ball_flow, "margin"),
                                   (SkeletalPoser.author, "margin")],
+    ("repair_medial", "margin"): [(MedialRepair, "margin"), (medial_repair, "margin")],
 }
 WORKFLOW_ONLY = {("demo", "folder"), ("classify", "exclude"), ("integrate", "device"), ("skeletal_pose", "rig"),
-                 ("skeletal_pose", "mesh"), ("skeletal_pose", "out")} | {
+                 ("skeletal_pose", "mesh"), ("skeletal_pose", "out"), ("downstream", "baselines")} | {
     (section, "threads") for section, value in CONFIG.items() if isinstance(value, dict) and "threads" in value}
 """Keys of the workflow (paths, per-pose inputs, rule threads) or of a stage only (the OpenCL device choice)."""
 

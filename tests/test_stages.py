@@ -13,7 +13,7 @@ from posefix import __version__
 from posefix.pipeline.artifacts import config_hash, inputs_hash
 
 STAGES = ["demo", "validate", "keyframes", "classify", "constraints", "fit", "integrate", "verify", "export",
-          "downstream", "summary", "render", "overview", "skeletal_pose"]
+          "downstream", "summary", "render", "overview", "skeletal_pose", "skeleton", "repair_medial"]
 
 
 def documented_datasets():
@@ -66,11 +66,14 @@ def demo_artifacts(tmp_path_factory):
               "--integrate", tmp / "integrate.h5", "--fit", tmp / "fit.h5", "--out", tmp / "verify.h5")
     run_stage("downstream", "--keyframes", tmp / "keyframes.h5", "--verify", tmp / "verify.h5", "--alphas", 1.0,
               "--k-bend", "0.01,0.1", "--max-iters", 4, "--out", tmp / "downstream.h5", "--png", tmp / "downstream.png")
+    run_stage("skeleton", "--reference", ref, "--out", tmp / "skeleton.h5")
+    run_stage("repair_medial", "--reference", ref, "--target", tgt, "--skeleton", tmp / "skeleton.h5",
+              "--out", tmp / "repair_medial.h5")
     return tmp
 
 
 @pytest.mark.parametrize("stage", ["validate", "keyframes", "classify", "constraints", "fit", "integrate", "verify",
-                                   "downstream"])
+                                   "downstream", "skeleton", "repair_medial"])
 def test_artifact_attributes_and_documentation(demo_artifacts, stage):
     path = demo_artifacts / ("library.h5" if stage == "validate" else f"{stage}.h5")
     docs = documented_datasets()[stage]
@@ -101,6 +104,54 @@ def test_downstream_runs_every_setting_towards_both_examples(demo_artifacts):
         metrics = fh["metrics"].attrs
         assert metrics["runs"] == 4 and metrics["original_iterations"] == iterations[[0, 2]].sum()
     assert (demo_artifacts / "downstream.png").stat().st_size > 10_000
+
+
+@pytest.fixture(scope="module")
+def medial(demo_artifacts):
+    """A baseline artifact as stage repair_medial writes it (the datasets the report reads), whose
+    repaired pose is S0's (verify.h5's)."""
+    from posefix.pipeline.artifacts import write_artifact
+    with h5py.File(demo_artifacts / "keyframes.h5", "r") as fh:
+        target = fh["target"][()]
+    with h5py.File(demo_artifacts / "verify.h5", "r") as fh:
+        X = fh["repaired"][()]
+    path = demo_artifacts / "medial.h5"
+    write_artifact(path, "repair_medial", {"start": target, "repaired": X}, params={}, inputs=[], timings={},
+                   metrics={"iterations": 3, "best": 3, "seconds": 1.0, "intersecting_faces_target": 0,
+                            "intersecting_faces_repaired": 0, "intersecting_faces_repaired_new": 0})
+    return path
+
+
+def test_downstream_checks_a_baseline_as_a_third_example(demo_artifacts, medial, tmp_path):
+    run_stage("downstream", "--keyframes", demo_artifacts / "keyframes.h5", "--verify", demo_artifacts / "verify.h5",
+              "--alphas", 1.0, "--k-bend", 0.01, "--max-iters", 4, "--baseline", f"medial={medial}",
+              "--out", tmp_path / "d.h5", "--png", tmp_path / "d.png")
+    with h5py.File(tmp_path / "d.h5", "r") as fh:
+        assert fh["example"][()].tolist() == [0, 1, 2]
+        assert [n.decode() for n in fh["examples"][()]] == ["original", "repaired", "medial"]
+        iterations, offsets, errors = fh["iterations"][()], fh["error_offsets"][()], fh["errors"][()]
+        # the same grid towards the same pose: the baseline's run is the repaired one, step for step
+        assert iterations[2] == iterations[1] >= 1
+        assert np.array_equal(errors[offsets[2]:offsets[3]], errors[offsets[1]:offsets[2]])
+        assert fh["metrics"].attrs["medial_iterations"] == iterations[2] and fh["metrics"].attrs["runs"] == 3
+        assert str(medial) in json.loads(fh.attrs["inputs"])
+    proc = run_stage("downstream", "--keyframes", demo_artifacts / "keyframes.h5", "--verify",
+                     demo_artifacts / "verify.h5", "--baseline", f"medial={demo_artifacts / 'verify.h5'}",
+                     "--out", tmp_path / "e.h5", check=False)
+    assert proc.returncode == 2 and "not a 'repair_medial' artifact" in proc.stderr and not (tmp_path / "e.h5").exists()
+
+
+def test_render_draws_the_baseline_beside_s0(demo_artifacts, medial, tmp_path):
+    from matplotlib.image import imread
+    common = ["--keyframes", demo_artifacts / "keyframes.h5", "--classify", demo_artifacts / "classify.h5",
+              "--fit", demo_artifacts / "fit.h5", "--verify", demo_artifacts / "verify.h5",
+              "--benchmarks", tmp_path, "--pose", "demo-01"]
+    run_stage("render", *common, "--out", tmp_path / "two")
+    run_stage("render", *common, "--baseline", f"medial={medial}", "--out", tmp_path / "three")
+    two, three = imread(tmp_path / "two" / "renders.png"), imread(tmp_path / "three" / "renders.png")
+    assert three.shape[0] == two.shape[0] and abs(three.shape[1] - 1.5 * two.shape[1]) <= 2  # a third panel
+    for name in ("deviation", "classification", "fit"):  # the other figures do not change
+        assert np.array_equal(imread(tmp_path / "two" / f"{name}.png"), imread(tmp_path / "three" / f"{name}.png"))
 
 
 def test_keyframes_and_classify_contents(demo_artifacts):
@@ -157,7 +208,7 @@ def test_classify_rejects_a_wrong_artifact(demo_artifacts, tmp_path):
 
 def test_export_reproduces_the_target_file_but_the_vertex_lines(demo_artifacts, tmp_path):
     target = demo_artifacts / "lib" / "demo-01.obj"
-    run_stage("export", "--verify", demo_artifacts / "verify.h5", "--target", target, "--out", tmp_path / "r.obj")
+    run_stage("export", "--artifact", demo_artifacts / "verify.h5", "--target", target, "--out", tmp_path / "r.obj")
     with h5py.File(demo_artifacts / "verify.h5", "r") as fh:
         X = fh["repaired"][()]
     ours, theirs = (tmp_path / "r.obj").read_text().splitlines(), target.read_text().splitlines()
@@ -172,7 +223,7 @@ def test_export_refuses_a_target_of_another_size(demo_artifacts, tmp_path):
     from posefix.pipeline.meshes import write_mesh
     V, F = icosphere(1)
     write_mesh(tmp_path / "ball.obj", V, F)
-    proc = run_stage("export", "--verify", demo_artifacts / "verify.h5", "--target", tmp_path / "ball.obj",
+    proc = run_stage("export", "--artifact", demo_artifacts / "verify.h5", "--target", tmp_path / "ball.obj",
                      "--out", tmp_path / "r.obj", check=False)
     assert proc.returncode == 2 and "ball.obj" in proc.stderr and "Traceback" not in proc.stderr
     assert not (tmp_path / "r.obj").exists()

@@ -5,7 +5,8 @@ import logging
 
 import pytest
 
-from posefix.pipeline.cli import configure_logging, float_list, int_list, run_stage, stage_parser
+from posefix.pipeline.cli import (configure_logging, float_list, int_list, named_options, named_path, run_stage,
+                                 stage_parser)
 from posefix.pipeline.errors import InputError
 
 
@@ -13,6 +14,21 @@ def test_number_lists():
     assert int_list("1,2, 3") == [1, 2, 3] and float_list("0.5 1") == [0.5, 1.0]
     with pytest.raises(argparse.ArgumentTypeError, match="not a list of integers"):
         int_list("1,x")
+
+
+def test_named_paths():
+    assert named_path("medial=results/a=b/medial.h5") == ("medial", "results/a=b/medial.h5")
+    for bad in ("medial", "=x.h5", "medial="):
+        with pytest.raises(argparse.ArgumentTypeError, match="not NAME=PATH"):
+            named_path(bad)
+
+
+def test_named_options_are_what_named_path_parses():
+    import shlex
+    paths = {"medial": "results/my lib/p 1/medial.h5", "other": "o.h5"}
+    words = shlex.split(named_options("--baseline", paths))
+    assert words[::2] == ["--baseline"] * 2 and dict(map(named_path, words[1::2])) == paths
+    assert named_options("--baseline", {}) == ""
 
 
 @pytest.fixture

@@ -35,3 +35,30 @@ def test_downstream_history_draws_every_run():
     fig = figures.downstream_history(runs, title="x")
     assert len(fig.axes) == 2 and all(len(ax.get_lines()) == 8 for ax in fig.axes)
     assert pixels(fig).var() > 0
+
+
+def test_renders_show_a_panel_per_baseline_on_one_scale():
+    V, F = icosphere(2)
+    R = camera(V)
+    faces, none = np.zeros(len(F), bool), np.zeros(len(F), bool)
+    faces[:10] = True
+    two = figures.renders(V, V * 1.01, F, R, faces, none, none)
+    three = figures.renders(V, V * 1.01, F, R, faces, none, none, baselines={"medial": (V * 1.5, faces)})
+    assert len(two.axes) == 2 and len(three.axes) == 3
+    assert [ax.get_title() for ax in three.axes] == ["target: 10 intersecting faces, 10 not in the reference",
+                                                     "S0: 0 intersecting faces, 0 new",
+                                                     "medial: 10 intersecting faces, 10 new"]
+    assert two.axes[1].get_title().startswith("repaired: ")
+    assert three.get_figwidth() == 1.5 * two.get_figwidth()
+    assert three.axes[0].get_xlim() == three.axes[2].get_xlim()  # one scale: the larger medial pose fits
+    assert pixels(three).var() > 0
+
+
+def test_downstream_history_draws_baselines_dotted():
+    runs = [{"alpha": 1.0, "k_bend": 1e-2, "example": ex, "errors": np.geomspace(10.0, 1e-3, 4), "converged": True,
+             "reason": "converged"} for ex in ("original", "repaired", "medial")]
+    fig = figures.downstream_history(runs, title="x")
+    styles = {line.get_label().split(",")[0]: line.get_linestyle() for line in fig.axes[0].get_lines()
+              if not line.get_label().startswith("_")}
+    assert styles == {"original": "--", "repaired": "-", "medial": ":"}
+    assert "dotted: medial" in fig.get_suptitle()

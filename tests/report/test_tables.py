@@ -50,3 +50,62 @@ def test_downstream_counts_compare_only_runs_where_both_converged():
     assert lines[2].endswith("| 1 | 40 / 20 | 50% |") and lines[-1].startswith("| **all** | 6 | 4 | 4 |")
     fig = figures.library_overview([e, {**_entry("b"), "downstream": _downstream([9], [False], [5], [True])}])
     assert len(fig.axes) == 6 and pixels(fig).var() > 0
+
+
+def _with_medial(entry, new, vc_max, seconds, converged=None):
+    """``entry`` with a medial baseline (``converged``: its converged runs at k_b 1e-3, 1e-2, 1e-1)."""
+    medial = {"intersecting_faces": {"repaired": new, "repaired_new": new}, "iterations": 10, "seconds": seconds,
+              "deviation": {"constrained_mean": vc_max / 2, "constrained_max": vc_max, "free_mean": 0.1,
+                            "free_max": 0.3}}
+    if converged is not None:
+        medial["downstream"] = {"k_bend": [1e-3, 1e-2, 1e-1], "seconds": 1.0, "alphas": {"1": {"medial": {
+            "iterations": [9] * 3, "converged": converged, "final_error": [0.0] * 3, "reason": ["stall"] * 3}}}}
+    return {**entry, "baselines": {"medial": medial}}
+
+
+def test_the_comparison_puts_s0_and_the_baseline_side_by_side():
+    from posefix.report.tables import comparison_table, compared_repairs
+    a = _with_medial(_entry("a", new=2), new=7, vc_max=2e-2, seconds=3.25)
+    assert compared_repairs(a, ["medial"]) == {
+        "S0": {"new": 2, "constrained_mean": 1e-4, "constrained_max": 1e-3, "free_max": 5e-2, "seconds": 6.0,
+               "converged": None},  # S0's seconds: its stages keyframes to verify (fit 5 + integrate 1)
+        "medial": {"new": 7, "constrained_mean": 1e-2, "constrained_max": 2e-2, "free_max": 0.3, "seconds": 3.25,
+                   "converged": None}}
+    header, rows = comparison_table([a])
+    assert header == ["pose", "new faces S0 / medial", "V_C dev. mean S0 / medial", "V_C dev. max S0 / medial",
+                      "free dev. max S0 / medial", "seconds S0 / medial"]  # no GN column without the check
+    assert rows == [["a", "2 / 7", "0.0001 / 0.01", "0.001 / 0.02", "0.05 / 0.3", "6.0 / 3.2"]]
+    assert comparison_table([_entry("a")]) == ([], [])
+    page = summary_html("lib", [a])
+    assert "<h3>S0 vs the baseline repairs</h3>" in page and "<td>2 / 7</td>" in page
+    assert "GN converged" not in page.split("<h3>")[1]  # neither as a column nor in the note
+    assert "S0 vs the baseline" not in summary_html("lib", [_entry("a")])
+
+
+def test_the_comparison_counts_converged_runs_towards_each_repair():
+    from posefix.report.tables import comparison_note, comparison_table
+    e = {**_entry("a"), "downstream": _downstream([40, 50, 200], [True, True, False], [20, 30, 25],
+                                                   [True, False, True])}
+    header, rows = comparison_table([_with_medial(e, 0, 1e-3, 1.0, converged=[True, False, False])])
+    assert header[-1] == "GN converged S0 / medial" and rows[0][-1] == "2 / 1"
+    assert "'GN converged': Gauss-Newton runs" in comparison_note(header)
+
+
+def test_library_overview_draws_the_baseline_beside_s0():
+    e = {**_entry("a"), "downstream": _downstream([40, 50, 200], [True, True, False], [20, 30, 25],
+                                                   [True, False, True])}
+    entries = [_with_medial(e, 4, 1e-3, 2.0, converged=[True, True, False]),
+               _with_medial({**e, "pose": "b"}, 0, 1e-2, 5.0, converged=[False, False, False])]
+    fig = figures.library_overview(entries)
+    assert len(fig.axes) == 6 and pixels(fig).var() > 0
+    faces, deviations, _, seconds, converged, _ = fig.axes
+    labels = [t.get_text() for t in faces.get_legend().get_texts()]
+    assert labels == ["target", "S0: new", "S0: new, in pass-through", "medial: new"]
+    medial_bars = faces.containers[-1]
+    assert [b.get_height() for b in medial_bars] == [4, 0]
+    assert [line.get_label() for line in deviations.get_lines()][3:6] == ["medial V_C max", "medial V_C mean",
+                                                                          "medial free max"]
+    assert [b.get_height() for b in seconds.containers[-1]] == [2.0, 5.0]
+    assert [b.get_height() for b in converged.containers[-1]] == [2, 0]  # runs converged towards medial
+    assert [t.get_text() for t in converged.get_legend().get_texts()] == ["runs per example", "original target", "S0",
+                                                                          "medial"]

@@ -1,9 +1,9 @@
 """The downstream check (S0 §5): does a Gauss–Newton discrete-shell solver converge better on the repaired pose?
 
 Example-driven deformation (Fröhlich & Botsch 2011) of the reference towards the original target
-and towards the repaired pose, over a grid of interpolation weights alpha and bending stiffnesses
-k_b (single settings are fragile). The same far-apart handle vertices are pinned at their linear
-blend in every run.
+and towards the repaired pose (and, optionally, the poses of baseline repairs), over a grid of
+interpolation weights alpha and bending stiffnesses k_b (single settings are fragile). The same
+far-apart handle vertices are pinned at their linear blend in every run.
 """
 
 import itertools
@@ -18,7 +18,8 @@ from posefix.check.shells import mesh_hinges, shell_energy
 log = logging.getLogger(__name__)
 
 EXAMPLES = ("original", "repaired")
-"""The two examples of the downstream check (S0 §5), in the order of downstream.h5's ``example`` codes."""
+"""The two examples of S0's downstream check (S0 §5): codes 0 and 1 of downstream.h5's ``example``;
+the baseline repairs checked beside them follow (downstream.h5's ``examples`` names every code)."""
 
 
 def handle_vertices(V, count=3):
@@ -50,11 +51,13 @@ def deform_towards(V_ref, F, V_example, alpha, k_bend, k_stretch=1.0, handles=No
 @dataclass
 class DownstreamCheck:
     """The runs of :func:`downstream_check`: ``grid`` (alpha, k_b, example code) and a
-    :class:`~posefix.check.gauss_newton.SolveResult` per run, in the same order, and the ``handles``."""
+    :class:`~posefix.check.gauss_newton.SolveResult` per run, in the same order, the ``handles`` and
+    the ``examples``' names (index: example code)."""
 
     grid: list
     runs: list
     handles: np.ndarray
+    examples: tuple = EXAMPLES
 
     def datasets(self):
         """The arrays of ``downstream.h5`` (``docs/artifacts.md``), dict of str -> ndarray."""
@@ -71,12 +74,12 @@ class DownstreamCheck:
             "seconds": np.array([r.seconds for r in runs]),
             "errors": np.concatenate([r.errors for r in runs]),
             "error_offsets": np.cumsum([0] + [len(r.errors) for r in runs]).astype(np.int64),
-            "handles": self.handles}
+            "handles": self.handles, "examples": np.array(self.examples)}
 
     def metrics(self):
         """Converged runs and iterations per example (``<example>_converged``, ``<example>_iterations``), ``runs``."""
         out = {}
-        for example, name in enumerate(EXAMPLES):
+        for example, name in enumerate(self.examples):
             sel = [r for g, r in zip(self.grid, self.runs) if g[2] == example]
             out[f"{name}_converged"] = int(sum(r.converged for r in sel))
             out[f"{name}_iterations"] = int(sum(r.iterations for r in sel))
@@ -85,7 +88,7 @@ class DownstreamCheck:
 
     def curves(self):
         """One dict per run for :func:`posefix.report.figures.downstream_history`."""
-        return [{"alpha": a, "k_bend": k, "example": EXAMPLES[e], "errors": r.errors, "converged": r.converged,
+        return [{"alpha": a, "k_bend": k, "example": self.examples[e], "errors": r.errors, "converged": r.converged,
                  "reason": r.reason} for (a, k, e), r in zip(self.grid, self.runs)]
 
 
@@ -98,7 +101,8 @@ def downstream_check(V_ref, F, examples, alphas=(0.5, 1.0), k_bend=(1e-3, 1e-2, 
     V_ref : (n, 3) float
     F : (m, 3) int
     examples : dict of str -> (n, 3) float
-        The poses named in :data:`EXAMPLES` (``original``: the target, ``repaired``).
+        The poses to deform towards, in the order of their example codes: :data:`EXAMPLES`
+        (``original``: the target, ``repaired``), then any baseline repairs by name.
     alphas, k_bend : sequence of float
         Interpolation weights and bending stiffnesses of the grid.
     k_stretch : float
@@ -109,17 +113,17 @@ def downstream_check(V_ref, F, examples, alphas=(0.5, 1.0), k_bend=(1e-3, 1e-2, 
     DownstreamCheck
         Runs in the order alpha, then k_b, then example.
     """
-    hinges, handles = mesh_hinges(F), handle_vertices(V_ref)
-    grid = list(itertools.product(alphas, k_bend, range(len(EXAMPLES))))
+    hinges, handles, names = mesh_hinges(F), handle_vertices(V_ref), tuple(examples)
+    grid = list(itertools.product(alphas, k_bend, range(len(names))))
     runs = []
     for i, (alpha, kb, example) in enumerate(grid, 1):
-        res = deform_towards(V_ref, F, examples[EXAMPLES[example]], alpha, kb, k_stretch, handles, settings, hinges)
+        res = deform_towards(V_ref, F, examples[names[example]], alpha, kb, k_stretch, handles, settings, hinges)
         log.info("[%d/%d] alpha %g k_b %g %-8s: %3d iterations, %s, E %.3g (%.1f s)", i, len(grid), alpha, kb,
-                 EXAMPLES[example], res.iterations, res.reason, res.errors[-1], res.seconds)
+                 names[example], res.iterations, res.reason, res.errors[-1], res.seconds)
         runs.append(res)
-    check = DownstreamCheck(grid, runs, handles)
+    check = DownstreamCheck(grid, runs, handles, names)
     metrics = check.metrics()
-    for example, name in enumerate(EXAMPLES):
+    for example, name in enumerate(names):
         log.info("%s: converged in %d of %d runs, %d iterations in all", name, metrics[f"{name}_converged"],
                  sum(g[2] == example for g in grid), metrics[f"{name}_iterations"])
     return check

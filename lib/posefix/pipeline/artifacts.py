@@ -116,3 +116,22 @@ def read_artifact(path, stage, names):
             return data, attrs
     except OSError as exc:
         raise InputError(path, f"cannot be read as HDF5: {str(exc).splitlines()[0]}") from None
+
+
+def read_baseline(path, name, names):
+    """:func:`read_artifact` of the artifact of baseline repair ``name`` (written by stage ``repair_<name>``).
+
+    Parameters
+    ----------
+    path : str or Path
+    name : str
+        The baseline, e.g. ``medial`` (stage ``repair_medial``, ``results/<library>/<pose>/medial.h5``).
+    names : list of str
+        Datasets to load into memory.
+
+    Returns
+    -------
+    data : dict of str -> ndarray
+    attrs : dict
+    """
+    return read_artifact(path, f"repair_{name}", names)

@@ -13,6 +13,7 @@ stderr, everything (DEBUG too) in the ``--log`` file. Library modules log throug
 import argparse
 import inspect
 import logging
+import shlex
 import sys
 import time
 
@@ -113,3 +114,17 @@ def _number_list(text, kind, name):
         return [kind(x) for x in text.replace(",", " ").split()]
     except ValueError:
         raise argparse.ArgumentTypeError(f"not a list of {name}: {text!r}") from None
+
+
+def named_path(text):
+    """Parse ``"medial=results/lib/p/medial.h5"`` into ``("medial", "results/lib/p/medial.h5")`` (argparse type)."""
+    name, sep, path = text.partition("=")
+    if not (sep and name and path):
+        raise argparse.ArgumentTypeError(f"not NAME=PATH: {text!r}")
+    return name, path
+
+
+def named_options(option, paths):
+    """Shell-quoted command-line options ``<option> <name>=<path>`` for ``paths`` {name: path}, str (what
+    :func:`named_path` parses; the rules pass the baseline artifacts to the stages with it)."""
+    return " ".join(f"{option} {shlex.quote(f'{name}={path}')}" for name, path in paths.items())

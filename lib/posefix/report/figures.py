@@ -14,12 +14,19 @@ from matplotlib.patches import Patch
 from posefix.repair.flags import (FLAGS, PUSHED, REPLACED_NEW_INTERSECTION, REPLACED_PASS_THROUGH, RIGID_REFERENCE,
                                   SEPARATED, SMOOTHED)
 from posefix.report.rasterizer import HIGHLIGHT, SECONDARY, draw_mesh, face_values, heat_colors, view_limits
-from posefix.report.tables import downstream_counts
+from posefix.report.tables import baseline_names, converged_runs, downstream_counts
 
 DPI = 110
 FLAG_COLORS = {REPLACED_PASS_THROUGH: "tab:red", REPLACED_NEW_INTERSECTION: "tab:orange", SMOOTHED: "tab:green",
                RIGID_REFERENCE: "tab:purple", PUSHED: "tab:blue", SEPARATED: "tab:brown"}
 """Colour of the vertices of each flag in the deviation figure (the snap's ``REPRODUCED`` is not drawn)."""
+EXAMPLE_STYLES = {"original": "--", "repaired": "-"}
+"""Line style of the downstream runs per example; the baselines' are dotted."""
+DEVIATION_MARKERS = (("constrained_max", "o", "V_C max"), ("constrained_mean", "s", "V_C mean"),
+                     ("free_max", "^", "free max"))
+"""Deviation summaries in the library overview: key, marker, label."""
+BASELINE_COLORS = ("tab:cyan", "tab:olive", "tab:brown")
+"""Colour of each baseline repair (in ``summary.json``'s order) in the library overview."""
 
 
 def panel_height(limits, width=4.6, extra=1.8):
@@ -28,7 +35,7 @@ def panel_height(limits, width=4.6, extra=1.8):
     return float(np.clip(width * aspect + extra, 3.0, 9.0))
 
 
-def renders(V_tgt, X, F, R, target_faces, repaired_faces, reference_faces, title=""):
+def renders(V_tgt, X, F, R, target_faces, repaired_faces, reference_faces, title="", baselines=None):
     """Target and repaired pose side by side, intersecting faces highlighted (S0 Fig. 6 style).
 
     Parameters
@@ -40,21 +47,25 @@ def renders(V_tgt, X, F, R, target_faces, repaired_faces, reference_faces, title
         Camera (:func:`posefix.report.rasterizer.camera`).
     target_faces, repaired_faces, reference_faces : (m,) bool
         Faces intersecting in the target, the repaired pose and the reference.
+    baselines : dict of str -> ((n, 3) float, (m,) bool), optional
+        Positions and intersecting faces of baseline repairs, one more panel each (the repaired pose
+        is then titled S0).
 
     Returns
     -------
     Figure
-        Red: intersecting faces the reference does not have (in the repaired pose: new ones);
+        Red: intersecting faces the reference does not have (in the repaired poses: new ones);
         orange: intersecting faces the reference has too.
     """
-    limits = view_limits(V_tgt, X, R=R)
-    fig = Figure(figsize=(10, panel_height(limits)), dpi=DPI)
-    panels = (("target", V_tgt, target_faces), ("repaired", X, repaired_faces))
+    panels = [("target", V_tgt, target_faces), ("S0" if baselines else "repaired", X, repaired_faces)]
+    panels += [(name, V, faces) for name, (V, faces) in (baselines or {}).items()]
+    limits = view_limits(*(V for _, V, _ in panels), R=R)
+    fig = Figure(figsize=(5 * len(panels), panel_height(limits)), dpi=DPI)
     for i, (name, V, faces) in enumerate(panels):
-        ax = fig.add_subplot(1, 2, i + 1)
+        ax = fig.add_subplot(1, len(panels), i + 1)
         draw_mesh(ax, V, F, R, highlight=[(faces & reference_faces, SECONDARY), (faces & ~reference_faces, HIGHLIGHT)],
                   scale=limits)
-        label = "new" if name == "repaired" else "not in the reference"
+        label = "not in the reference" if i == 0 else "new"
         ax.set_title(f"{name}: {faces.sum()} intersecting faces, {(faces & ~reference_faces).sum()} {label}",
                      fontsize=10)
     fig.legend(handles=[Patch(color=HIGHLIGHT, label="intersecting, not in the reference"),
@@ -197,42 +208,105 @@ def downstream_history(runs, title=""):
     Parameters
     ----------
     runs : list of dict
-        One per run: ``alpha``, ``k_bend`` (floats), ``example`` ("original" or "repaired"),
-        ``errors`` (iterations + 1,) float, ``converged`` (bool), ``reason`` (str).
+        One per run: ``alpha``, ``k_bend`` (floats), ``example`` ("original", "repaired" or a
+        baseline's name, drawn dotted), ``errors`` (iterations + 1,) float, ``converged`` (bool),
+        ``reason`` (str).
     """
     alphas = sorted({r["alpha"] for r in runs})
     k_bends = sorted({r["k_bend"] for r in runs})
     colors = {k: f"C{i}" for i, k in enumerate(k_bends)}
+    baselines = sorted({r["example"] for r in runs} - set(EXAMPLE_STYLES))
+    styles = "solid: repaired, dashed: original" + (f", dotted: {', '.join(baselines)}" if baselines else "")
     fig = Figure(figsize=(5 * len(alphas) + 1, 4.2), dpi=DPI)
     for i, alpha in enumerate(alphas):
         ax = fig.add_subplot(1, len(alphas), i + 1)
         for r in (r for r in runs if r["alpha"] == alpha):
             errors = np.maximum(r["errors"], 1e-30)
-            style = "-" if r["example"] == "repaired" else "--"
+            style = EXAMPLE_STYLES.get(r["example"], ":")
             ax.semilogy(np.arange(len(errors)), errors, style, color=colors[r["k_bend"]],
                         label=f"{r['example']}, k_b {r['k_bend']:g}: {len(errors) - 1} it., "
                               f"{'converged' if r['converged'] else r['reason']}")
             ax.plot(len(errors) - 1, errors[-1], "o" if r["converged"] else "x", color=colors[r["k_bend"]])
         ax.set_xlabel("Gauss-Newton iteration")
         ax.set_ylabel("energy (sum of squared residuals)")
-        ax.set_title(f"alpha = {alpha:g}  (solid: repaired, dashed: original; o converged, x not)", fontsize=9)
+        ax.set_title(f"alpha = {alpha:g}", fontsize=9)
         ax.legend(fontsize=6.5)
-    fig.suptitle(title, fontsize=11)
+    fig.suptitle(f"{title}\n({styles}; o converged, x not)", fontsize=10)
     fig.tight_layout()
     return fig
 
 
-def _downstream_panels(fig, x, counts):
-    """Overview panels 5 and 6: Gauss–Newton convergence and iterations, original vs repaired."""
+def _offsets(count):
+    """x offsets and width of ``count`` bars side by side per pose, ((count,) float, float)."""
+    width = 0.8 / count
+    return (np.arange(count) - (count - 1) / 2) * width, width
+
+
+def _intersection_panel(ax, x, entries, names):
+    """Overview panel 1: intersecting faces of the target, new ones of S0's and the baselines' repairs."""
+    dx, width = _offsets(2 + len(names))
+    ax.bar(x + dx[0], [e["intersecting_faces"]["target"] for e in entries], width, label="target")
+    new = np.array([e["intersecting_faces"]["repaired_new"] for e in entries])
+    inside = np.array([e["intersecting_faces"].get("repaired_new_in_fallback", 0) for e in entries])
+    s0 = "S0" if names else "repaired"
+    ax.bar(x + dx[1], new - inside, width, color="tab:red", label=f"{s0}: new")
+    ax.bar(x + dx[1], inside, width, bottom=new - inside, color="tab:pink", label=f"{s0}: new, in pass-through")
+    for j, name in enumerate(names):
+        ax.bar(x + dx[2 + j], [e["baselines"][name]["intersecting_faces"]["repaired_new"] for e in entries], width,
+               color=BASELINE_COLORS[j], label=f"{name}: new")
+    ax.set_ylabel("intersecting faces")
+    ax.legend(fontsize=8)
+
+
+def _deviation_panel(ax, x, entries, names, bar):
+    """Overview panel 2: deviations from the target, S0 filled markers, each baseline hollow beside it."""
+    sources = [("S0 " if names else "", 0.0, "full", [e["deviation"] for e in entries])]
+    sources += [(f"{name} ", 0.15 * (j + 1), "none", [e["baselines"][name]["deviation"] for e in entries])
+                for j, name in enumerate(names)]
+    for prefix, shift, fill, deviations in sources:
+        for j, (key, marker, label) in enumerate(DEVIATION_MARKERS):
+            ax.plot(x + shift, [d[key] for d in deviations], marker, color=f"C{j}", fillstyle=fill,
+                    label=prefix + label)
+    ax.axhline(bar, color="k", ls=":", label=f"bar {bar:g}")
+    ax.set_yscale("symlog", linthresh=1e-5)
+    ax.set_ylim(bottom=0)
+    ax.set_ylabel("deviation / bbox diagonal (linear below 1e-5)")
+    ax.legend(fontsize=8, ncol=1 + bool(names))
+
+
+def _seconds_panel(ax, x, entries, names):
+    """Overview panel 4: wall seconds per stage, and beside them each baseline's repair (hatched)."""
+    dx, width = _offsets(1 + len(names))
+    bottom = np.zeros(len(entries))
+    for stage in entries[0]["seconds_stages"]:
+        values = np.array([e["seconds_stages"].get(stage) or 0.0 for e in entries])
+        ax.bar(x + dx[0], values, width, bottom=bottom, label=stage)
+        bottom += values
+    for j, name in enumerate(names):
+        ax.bar(x + dx[1 + j], [e["baselines"][name]["seconds"] for e in entries], width, color=BASELINE_COLORS[j],
+               hatch="//", label=f"{name} repair")
+    ax.set_ylabel("wall seconds per stage")
+    ax.legend(fontsize=7, ncol=2)
+
+
+def _downstream_panels(fig, x, entries, names):
+    """Overview panels 5 and 6: Gauss–Newton convergence (original, repaired and the baselines ``names``)
+    and iterations, original vs repaired."""
+    counts, s0 = [downstream_counts(e) for e in entries], "S0" if names else "repaired pose"
+    series = [([c["converged_original"] for c in counts], "original target", "tab:gray"),
+              ([c["converged_repaired"] for c in counts], s0, "tab:green")]
+    series += [([converged_runs(e["baselines"][name]["downstream"], name) for e in entries], name, BASELINE_COLORS[j])
+               for j, name in enumerate(names)]
     ax = fig.add_subplot(3, 2, 5)
-    ax.bar(x - 0.2, [c["converged_original"] for c in counts], 0.4, color="tab:gray", label="original target")
-    ax.bar(x + 0.2, [c["converged_repaired"] for c in counts], 0.4, color="tab:green", label="repaired pose")
+    dx, width = _offsets(len(series))
+    for offset, (values, label, color) in zip(dx, series):
+        ax.bar(x + offset, values, width, color=color, label=label)
     ax.axhline(counts[0]["runs"], color="k", ls=":", label="runs per example")
     ax.set_ylabel("converged Gauss-Newton runs")
     ax.legend(fontsize=8)
     ax = fig.add_subplot(3, 2, 6)
     ax.bar(x - 0.2, [c["paired_original"] for c in counts], 0.4, color="tab:gray", label="original target")
-    ax.bar(x + 0.2, [c["paired_repaired"] for c in counts], 0.4, color="tab:green", label="repaired pose")
+    ax.bar(x + 0.2, [c["paired_repaired"] for c in counts], 0.4, color="tab:green", label=s0)
     for xi, c in zip(x, counts):
         ax.annotate(str(c["paired"]), (xi, max(c["paired_original"], c["paired_repaired"])), ha="center",
                     va="bottom", fontsize=7)
@@ -242,7 +316,8 @@ def _downstream_panels(fig, x, counts):
 
 def library_overview(entries, bar=5e-3, title=""):
     """All poses of a library at a glance: intersections, deviation, centres, seconds, and the
-    downstream Gauss–Newton check (converged runs, iterations) when the entries have it.
+    downstream Gauss–Newton check (converged runs, iterations) when the entries have it; the
+    baseline repairs (``summary.json``'s ``baselines``) beside S0's.
 
     Parameters
     ----------
@@ -253,25 +328,11 @@ def library_overview(entries, bar=5e-3, title=""):
     """
     poses = [e["pose"] for e in entries]
     x = np.arange(len(poses))
+    names = baseline_names(entries)
     rows = 3 if all("downstream" in e for e in entries) else 2
-    fig = Figure(figsize=(max(10, 0.9 * len(poses) + 4), 3.75 * rows), dpi=DPI)
-    ax = fig.add_subplot(rows, 2, 1)
-    ax.bar(x - 0.2, [e["intersecting_faces"]["target"] for e in entries], 0.4, label="target")
-    new = np.array([e["intersecting_faces"]["repaired_new"] for e in entries])
-    inside = np.array([e["intersecting_faces"].get("repaired_new_in_fallback", 0) for e in entries])
-    ax.bar(x + 0.2, new - inside, 0.4, color="tab:red", label="repaired: new")
-    ax.bar(x + 0.2, inside, 0.4, bottom=new - inside, color="tab:pink", label="repaired: new, in pass-through")
-    ax.set_ylabel("intersecting faces")
-    ax.legend(fontsize=8)
-    ax = fig.add_subplot(rows, 2, 2)
-    for key, marker, label in (("constrained_max", "o", "V_C max"), ("constrained_mean", "s", "V_C mean"),
-                               ("free_max", "^", "free max")):
-        ax.plot(x, [e["deviation"][key] for e in entries], marker, label=label)
-    ax.axhline(bar, color="k", ls=":", label=f"bar {bar:g}")
-    ax.set_yscale("symlog", linthresh=1e-5)
-    ax.set_ylim(bottom=0)
-    ax.set_ylabel("deviation / bbox diagonal (linear below 1e-5)")
-    ax.legend(fontsize=8)
+    fig = Figure(figsize=(max(10, (0.9 + 0.3 * len(names)) * len(poses) + 4), 3.75 * rows), dpi=DPI)
+    _intersection_panel(fig.add_subplot(rows, 2, 1), x, entries, names)
+    _deviation_panel(fig.add_subplot(rows, 2, 2), x, entries, names, bar)
     ax = fig.add_subplot(rows, 2, 3)
     ax.bar(x - 0.2, [e["fit"]["centers"] for e in entries], 0.4, color="tab:purple", label="RBF centres")
     ax.bar(x + 0.2, [e["fallback_vertices"] for e in entries], 0.4, color="tab:orange", label="fallback vertices")
@@ -279,16 +340,10 @@ def library_overview(entries, bar=5e-3, title=""):
     ax.set_ylim(bottom=0)
     ax.set_ylabel("count")
     ax.legend(fontsize=8)
-    ax = fig.add_subplot(rows, 2, 4)
-    bottom = np.zeros(len(entries))
-    for stage in entries[0]["seconds_stages"]:
-        values = np.array([e["seconds_stages"].get(stage) or 0.0 for e in entries])
-        ax.bar(x, values, bottom=bottom, label=stage)
-        bottom += values
-    ax.set_ylabel("wall seconds per stage")
-    ax.legend(fontsize=7, ncol=2)
+    _seconds_panel(fig.add_subplot(rows, 2, 4), x, entries, names)
     if rows == 3:
-        _downstream_panels(fig, x, [downstream_counts(e) for e in entries])
+        checked = [n for n in names if all("downstream" in e["baselines"][n] for e in entries)]
+        _downstream_panels(fig, x, entries, checked)
     for ax in fig.axes:
         ax.set_xticks(x, poses, rotation=45, ha="right", fontsize=8)
     fig.suptitle(title, fontsize=12)

@@ -8,7 +8,7 @@ import numpy as np
 
 from posefix.check.downstream import EXAMPLES
 from posefix.check.gauss_newton import STOP_REASONS
-from posefix.report.tables import downstream_markdown
+from posefix.report.tables import comparison_markdown, downstream_markdown
 
 DEVIATIONS = ("constrained_max", "constrained_mean", "constrained_p95", "free_max", "free_mean", "free_p95")
 """Deviation summaries of a pose (relative to the bbox diagonal)."""
@@ -16,7 +16,7 @@ SUMMARY_STAGES = ("keyframes", "classify", "constraints", "fit", "integrate", "v
 """Stages whose wall seconds a summary entry adds up (``seconds_stages``)."""
 
 
-def pose_entry(pose, metrics, downstream, seconds):
+def pose_entry(pose, metrics, downstream, seconds, baselines=None):
     """The summary entry of one pose.
 
     Parameters
@@ -29,6 +29,8 @@ def pose_entry(pose, metrics, downstream, seconds):
         Datasets of ``downstream.h5`` (:func:`downstream_entry`).
     seconds : dict of str -> float or None
         Wall seconds per stage of :data:`SUMMARY_STAGES` (None where unknown).
+    baselines : dict of str -> dict, optional
+        :func:`baseline_entry` per baseline repair of the pose (key ``baselines``; none: no key).
 
     Returns
     -------
@@ -55,28 +57,69 @@ def pose_entry(pose, metrics, downstream, seconds):
                      "new_intersection": int(ve["fallback_new_intersection"]),
                      "reproduced": int(ve["reproduced_vertices"]), "pushed": int(ve["pushed_vertices"])},
         "downstream": downstream_entry(downstream),
+        **({"baselines": baselines} if baselines else {}),
         "seconds_stages": seconds,
         "seconds_total": sum(v for v in seconds.values() if v is not None),
     }
 
 
-DOWNSTREAM_DATASETS = ("alpha", "k_bend", "example", "iterations", "converged", "reason", "final_error", "seconds")
+def baseline_entry(name, metrics, deviation, downstream):
+    """The summary of one baseline repair of a pose (``baselines.<name>`` of its entry).
+
+    Parameters
+    ----------
+    name : str
+        The baseline (``medial``).
+    metrics : dict
+        The ``metrics`` of its artifact (``<pose>/<name>.h5``).
+    deviation : dict
+        Deviation summary of its repaired pose from the target over ``V_C`` and the rest
+        (:func:`posefix.repair.deviation.deviation`, the same as S0's).
+    downstream : dict of str -> ndarray
+        Datasets of ``downstream.h5``; the entry gets a ``downstream`` like S0's (:func:`downstream_entry`)
+        when the check ran towards the baseline.
+
+    Returns
+    -------
+    dict
+    """
+    entry = {"intersecting_faces": {"repaired": int(metrics["intersecting_faces_repaired"]),
+                                    "repaired_new": int(metrics["intersecting_faces_repaired_new"])},
+             "deviation": {k: float(deviation[k]) for k in DEVIATIONS},
+             "iterations": int(metrics["iterations"]), "seconds": float(metrics["seconds"])}
+    if name in example_names(downstream):
+        entry["downstream"] = downstream_entry(downstream, (name,))
+    return entry
+
+
+DOWNSTREAM_DATASETS = ("alpha", "k_bend", "example", "examples", "iterations", "converged", "reason", "final_error",
+                       "seconds")
 """The datasets of ``downstream.h5`` that :func:`downstream_entry` reads."""
 
 
-def downstream_entry(d):
+def example_names(d):
+    """Names of the example codes of ``downstream.h5`` (its ``examples``, as read back), list of str."""
+    return [n.decode() if isinstance(n, bytes) else str(n) for n in d["examples"]]
+
+
+def downstream_entry(d, examples=EXAMPLES):
     """``downstream`` of a summary entry: per alpha and example, lists over k_b.
 
     Parameters
     ----------
     d : dict of str -> ndarray
         :data:`DOWNSTREAM_DATASETS` of ``downstream.h5``.
+    examples : sequence of str
+        The examples to list: S0's (the original target and the repaired pose), or a baseline's name.
+        ``seconds`` sums their runs.
     """
-    entry = {"k_bend": sorted(set(d["k_bend"].tolist())), "alphas": {}, "seconds": float(d["seconds"].sum())}
+    codes = {name: code for code, name in enumerate(example_names(d))}
+    mine = np.isin(d["example"], [codes[name] for name in examples])
+    entry = {"k_bend": sorted(set(d["k_bend"].tolist())), "alphas": {}, "seconds": float(d["seconds"][mine].sum())}
     for alpha in sorted(set(d["alpha"].tolist())):
         per = entry["alphas"][f"{alpha:g}"] = {}
-        for example, name in enumerate(EXAMPLES):
-            runs = [i for i in np.flatnonzero((d["alpha"] == alpha) & (d["example"] == example))]
+        for name in examples:
+            runs = list(np.flatnonzero((d["alpha"] == alpha) & (d["example"] == codes[name])))
             runs.sort(key=lambda i: d["k_bend"][i])
             per[name] = {"iterations": [int(d["iterations"][i]) for i in runs],
                          "converged": [bool(d["converged"][i]) for i in runs],
@@ -103,6 +146,7 @@ def summary_markdown(library, entries):
               "Example-driven deformation (Froehlich & Botsch 2011) from the reference towards the original target and "
               "towards the repaired pose, over the grid of alpha x k_b in config downstream; 'fewer': iteration "
               "reduction over the settings where both converged."]
+    lines += comparison_markdown(entries)
     return "\n".join(lines) + "\n"
 
 

@@ -2,6 +2,8 @@
 
 import html
 
+from posefix.report.contents import TIMED_STAGES
+
 DEVIATION_BAR = 5e-3
 """Constrained-region max deviation / d above which a pose is flagged (issue 4's acceptance bar)."""
 STATUS_COLORS = {"ok": "#d8f0d8", "fallback": "#fff2c6", "check": "#f8d0d0"}
@@ -99,6 +101,97 @@ def _downstream_row(name, c):
             f"{c['paired_original']} / {c['paired_repaired']} | {fewer} |")
 
 
+def baseline_names(entries):
+    """The baseline repairs every entry has (``summary.json``'s ``baselines``), in their order, list of str."""
+    first = entries[0].get("baselines", {}) if entries else {}
+    return [name for name in first if all(name in e.get("baselines", {}) for e in entries)]
+
+
+def repair_seconds(entry):
+    """Wall seconds of S0's repair of a pose: its stages keyframes to verify (:data:`TIMED_STAGES`,
+    ``seconds_stages`` from the Snakemake benchmark files), float."""
+    return sum(entry["seconds_stages"].get(stage) or 0.0 for stage in TIMED_STAGES)
+
+
+def converged_runs(downstream, example):
+    """Converged Gauss–Newton runs towards ``example`` in a summary's ``downstream``, int."""
+    return sum(sum(per[example]["converged"]) for per in downstream["alphas"].values())
+
+
+def compared_repairs(entry, names):
+    """S0's repair of a pose and the baselines ``names``, side by side: ``{"S0": ..., name: ...}``.
+
+    Each value has ``new`` (new intersecting faces), ``constrained_mean``, ``constrained_max``,
+    ``free_max`` (deviations / d), ``seconds`` (S0: :func:`repair_seconds`; a baseline: its own) and
+    ``converged`` (converged Gauss–Newton runs towards it; None without the check).
+    """
+    out = {"S0": _compared(entry, repair_seconds(entry), "repaired")}
+    for name in names:
+        out[name] = _compared(entry["baselines"][name], entry["baselines"][name]["seconds"], name)
+    return out
+
+
+def _compared(repair, seconds, example):
+    """One value of :func:`compared_repairs` from an entry or a baseline's entry (the same keys)."""
+    dev, down = repair["deviation"], repair.get("downstream")
+    return {"new": repair["intersecting_faces"]["repaired_new"], "constrained_mean": dev["constrained_mean"],
+            "constrained_max": dev["constrained_max"], "free_max": dev["free_max"], "seconds": seconds,
+            "converged": None if down is None else converged_runs(down, example)}
+
+
+COMPARISON = (("new faces", "new", "{}"), ("V_C dev. mean", "constrained_mean", "{:.2g}"),
+              ("V_C dev. max", "constrained_max", "{:.2g}"), ("free dev. max", "free_max", "{:.2g}"),
+              ("seconds", "seconds", "{:.1f}"), ("GN converged", "converged", "{}"))
+"""Columns of :func:`comparison_table`: label, key of :func:`compared_repairs`, format."""
+
+
+def comparison_table(entries):
+    """S0 vs the baseline repairs per pose: ``(header, rows)``, lists of str, one cell ``S0 / <baseline> ...``
+    per :data:`COMPARISON` column (``GN converged`` only when every repair has the downstream check);
+    ``([], [])`` without baselines."""
+    names = baseline_names(entries)
+    if not names:
+        return [], []
+    repairs = [compared_repairs(e, names) for e in entries]
+    columns = [c for c in COMPARISON
+               if c[1] != "converged" or all(r["converged"] is not None for rs in repairs for r in rs.values())]
+    header = ["pose"] + [f"{label} {' / '.join(['S0', *names])}" for label, _, _ in columns]
+    rows = [[e["pose"]] + [" / ".join(fmt.format(r[key]) for r in rs.values()) for _, key, fmt in columns]
+            for e, rs in zip(entries, repairs)]
+    return header, rows
+
+
+def comparison_note(header):
+    """What the columns of a :func:`comparison_table` with ``header`` mean, str."""
+    note = ("'new faces': intersecting in the repaired pose but not in the reference; deviations from the target "
+            "relative to the bbox diagonal, over S0's V_C and the rest; seconds: S0's stages keyframes to verify "
+            "(benchmark files), a baseline's repair itself (its artifact)")
+    if header[-1].startswith("GN converged"):
+        note += "; 'GN converged': Gauss-Newton runs towards the repaired pose that converged (downstream check)"
+    return note + "."
+
+
+def comparison_markdown(entries):
+    """``summary.md``'s section comparing S0 with the baseline repairs, list of str lines (none without baselines)."""
+    header, rows = comparison_table(entries)
+    if not rows:
+        return []
+    return (["", "## S0 vs the baseline repairs", "", "| " + " | ".join(header) + " |",
+             "|---|" + "---:|" * (len(header) - 1)] + ["| " + " | ".join(row) + " |" for row in rows]
+            + ["", comparison_note(header)])
+
+
+def _comparison_html(entries):
+    """The HTML section of :func:`comparison_table` (empty without baselines), str."""
+    header, rows = comparison_table(entries)
+    if not rows:
+        return ""
+    head = "".join(f"<th>{html.escape(h)}</th>" for h in header)
+    body = "".join("<tr>" + "".join(f"<td>{html.escape(c)}</td>" for c in row) + "</tr>" for row in rows)
+    return (f"<h3>S0 vs the baseline repairs</h3><p>{html.escape(comparison_note(header))}</p>"
+            f"<table><thead><tr>{head}</tr></thead><tbody>{body}</tbody></table>")
+
+
 COLUMNS = (
     ("pose", lambda e: e["pose"]),
     ("status", None),
@@ -142,4 +235,5 @@ def summary_html(library, entries, bar=DEVIATION_BAR):
             f"regions copied from the target or untangled; check: new intersecting faces outside the pass-through "
             f"fallback or a V_C max deviation above {bar:g} of the bbox diagonal. Deviations are relative to the "
             "reference's bbox diagonal.</p>"
-            f"<table><thead><tr>{head}</tr></thead><tbody>{''.join(rows)}</tbody></table></body></html>\n")
+            f"<table><thead><tr>{head}</tr></thead><tbody>{''.join(rows)}</tbody></table>"
+            f"{_comparison_html(entries)}</body></html>\n")

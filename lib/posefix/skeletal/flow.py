@@ -212,8 +212,9 @@ class MedialBallFlow:
         max_iters : int
         reference_pairs : (q, 2) int, optional
             Intersecting face pairs that do not count (the reference's own).
-        ftol : float
-            Stop once intersection-free and ``sum |f|`` decreased by less than this fraction in a step.
+        ftol : float or None
+            Stop once intersection-free and ``sum |f|`` decreased by less than this fraction in a step;
+            None: as soon as intersection-free.
 
         Returns
         -------
@@ -224,7 +225,7 @@ class MedialBallFlow:
         counts, errors, steps = [self._intersecting(X, reference_pairs)], [np.abs(balls[0][0]).sum()], []
         best, X_best = 0, X
         for _ in range(max_iters):
-            if counts[-1] == 0 and len(errors) > 1 and errors[-1] >= (1.0 - ftol) * errors[-2]:
+            if counts[-1] == 0 and (ftol is None or len(errors) > 1 and errors[-1] >= (1.0 - ftol) * errors[-2]):
                 break
             t0 = time.perf_counter()
             X = self.step(X, balls)
