@@ -4,8 +4,10 @@ Libraries: lion, cat and horse poses from ../shared/data (the demo library when 
 absent, which the report says). Pieces: the self-intersection detector against pymeshlab
 (benchmarks/detector.py) on every key frame, the RBF fit variants on the first pose with the scipy
 peer check (benchmarks/fit.py), the OpenCL integration of every lion pose against numpy on two
-(benchmarks/integrate.py), the repair and the downstream check (each library's summary.json), and S1's skeletal
-deformation next to S1 Fig. 12-13 (benchmarks/skeletal.py, which also runs alone). Everything is collected into
+(benchmarks/integrate.py), the repair and the downstream check (each library's summary.json), S1's skeletal
+deformation next to S1 Fig. 12-13 (benchmarks/skeletal.py, which also runs alone), and S0 vs the medial
+repair on every pose (benchmarks/repairs.py, which also runs alone; the pipeline runs with the downstream
+check towards both repairs). Everything is collected into
 ``BENCHMARKS.md`` and ``BENCHMARKS.json`` (plus ``blocked_vs_full.png``) next to the per-library
 pieces (``summary-<library>.md``: the library's per-pose summary); the same command on the same
 data gives the same tables, times aside.
@@ -26,6 +28,7 @@ from matplotlib.figure import Figure
 from threadpoolctl import threadpool_info
 
 from posefix.report.tables import downstream_grid_markdown, downstream_markdown
+from repairs import CHECK_BASELINES  # benchmarks/repairs.py, beside this script: the same pipeline call
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -64,7 +67,8 @@ def bench_library(lib, out, cores):
     """Pipeline and the benchmark pieces of one library (None: the demo); returns their JSON."""
     name = lib.name if lib else "demo"
     start = time.perf_counter()
-    run(sys.executable, "-m", "snakemake", "--cores", cores, *(["--config", f"library={lib}"] if lib else []))
+    run(sys.executable, "-m", "snakemake", "--cores", cores, "--config", *([f"library={lib}"] if lib else []),
+        CHECK_BASELINES)
     pipeline_s = time.perf_counter() - start
     results = ROOT / "results" / name
     pieces = {"pipeline_seconds": pipeline_s,
@@ -192,6 +196,7 @@ def report(info, benchmarks, note, out):
               "Ours is exact (filtered orient3d with an exact fallback); pymeshlab's is floating point. "
               "Per pose: `detector-<library>.md`.", ""]
     lines += (out / "skeletal.md").read_text().splitlines() + [""]
+    lines += (out / "repairs.md").read_text().splitlines() + [""]
     return "\n".join(lines)
 
 
@@ -209,6 +214,7 @@ def main():
     info = machine()
     blocked_vs_full_figure(benchmarks).savefig(out / "blocked_vs_full.png", metadata={"Software": None})
     run(sys.executable, ROOT / "benchmarks" / "skeletal.py", "--out", out, "--threads", args.cores)
+    run(sys.executable, ROOT / "benchmarks" / "repairs.py", "--out", out, "--cores", args.cores)
     note += f" Wall time of the whole benchmark: {(time.perf_counter() - start) / 60:.1f} min."
     (out / "BENCHMARKS.md").write_text(report(info, benchmarks, note.strip(), out))
     (out / "BENCHMARKS.json").write_text(json.dumps({"machine": info, "libraries": benchmarks}, indent=1))

@@ -20,7 +20,7 @@ from posefix.skeletal.repair import MedialRepair
 DOCS = {
     "start": ("length", "the target pose, (n, 3) float64"),
     "repaired": ("length", "the medial-repaired pose, (n, 3) float64"),
-    "intersecting": ("faces", "new intersecting faces before every flow iteration (0: the rebuilt start) and after the last, (k+1,) int64"),
+    "intersecting": ("faces", "new intersecting faces (not intersecting in the reference) before every flow iteration (0: the rebuilt start) and after the last, (k+1,) int64"),
     "error": ("length", "S1's sum_i |f(x_i)| at the same moments, (k+1,) float64"),
     "step_seconds": ("s", "seconds of each flow step, (k,) float64"),
     "skeleton": ("length", "the deformed skeletal mesh (ball centres; radii are the reference's), (n, 3) float64"),

@@ -82,6 +82,7 @@ def test_the_report_compares_s0_with_the_medial_repair(demo_run):
     measured as S0's; renders.png has a third panel."""
     import json
     from matplotlib.image import imread
+    from posefix.pipeline.timings import benchmark_seconds
     from posefix.repair.deviation import deviation
     summary = json.loads((demo_run / "reports" / "demo" / "summary.json").read_text())
     for e in summary["poses"]:
@@ -92,7 +93,10 @@ def test_the_report_compares_s0_with_the_medial_repair(demo_run):
             metrics = fh["metrics"].attrs
             assert medial["intersecting_faces"] == {"repaired": metrics["intersecting_faces_repaired"],
                                                     "repaired_new": metrics["intersecting_faces_repaired_new"]}
-            assert medial["iterations"] == metrics["iterations"] and medial["seconds"] == metrics["seconds"]
+            assert medial["iterations"] == metrics["iterations"]
+            # wall seconds of the stage, as S0's (the artifact's in-process seconds are less)
+            wall = benchmark_seconds(demo_run / "results" / "demo" / "benchmarks" / e["pose"], "repair_medial")
+            assert medial["seconds"] == wall >= metrics["seconds"]
             assert np.array_equal(fh["start"][()], kf["target"][()])  # measured from the same target as S0
             _, dev = deviation(fh["repaired"][()], kf["target"][()], cl["mask"][()],
                                kf["metrics"].attrs["bbox_diagonal"])

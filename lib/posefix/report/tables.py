@@ -165,7 +165,7 @@ def comparison_note(header):
     """What the columns of a :func:`comparison_table` with ``header`` mean, str."""
     note = ("'new faces': intersecting in the repaired pose but not in the reference; deviations from the target "
             "relative to the bbox diagonal, over S0's V_C and the rest; seconds: S0's stages keyframes to verify "
-            "(benchmark files), a baseline's repair itself (its artifact)")
+            "(benchmark files), a baseline's stage (without the skeleton, once per library)")
     if header[-1].startswith("GN converged"):
         note += "; 'GN converged': Gauss-Newton runs towards the repaired pose that converged (downstream check)"
     return note + "."

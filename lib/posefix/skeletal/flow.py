@@ -26,7 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial import cKDTree
 
-from posefix.mesh.intersections import intersecting_faces, new_pairs, self_intersecting_pairs
+from posefix.mesh.intersections import intersecting_faces, self_intersecting_pairs
 
 log = logging.getLogger(__name__)
 
@@ -134,7 +134,7 @@ class FlowResult:
     best : int
         Its iteration (0: the start).
     intersecting : (k + 1,) int
-        Intersecting faces (new ones when reference pairs were given) before every iteration and after the last.
+        Intersecting faces (given reference pairs: those that do not intersect in the reference, S0's *new*)
     error : (k + 1,) float
         ``sum_i |f(x_i)|`` (Eq. 10's approximation, model units) at the same moments.
     step_seconds : (k,) float
@@ -211,7 +211,7 @@ class MedialBallFlow:
             Start (the reconstructed or target pose).
         max_iters : int
         reference_pairs : (q, 2) int, optional
-            Intersecting face pairs that do not count (the reference's own).
+            The reference's intersecting face pairs: their faces do not count.
         ftol : float or None
             Stop once intersection-free and ``sum |f|`` decreased by less than this fraction in a step;
             None: as soon as intersection-free.
@@ -244,10 +244,10 @@ class MedialBallFlow:
         return result
 
     def _intersecting(self, X, reference_pairs):
-        pairs = self_intersecting_pairs(X, self.rec.F)
-        if reference_pairs is not None:
-            pairs = new_pairs(pairs, reference_pairs)
-        return int(intersecting_faces(pairs, len(self.rec.F)).sum())
+        faces = intersecting_faces(self_intersecting_pairs(X, self.rec.F), len(self.rec.F))
+        if reference_pairs is not None:  # as S0's verify: faces that do not intersect in the reference
+            faces &= ~intersecting_faces(reference_pairs, len(self.rec.F))
+        return int(faces.sum())
 
 
 def medial_ball_flow(reconstruction, X, S_d, margin, tau=0.5, neighbours=64, max_iters=50, reference_pairs=None):

@@ -37,7 +37,7 @@ from scipy.sparse.csgraph import dijkstra
 from posefix.mesh.contacts import edge_graph
 from posefix.mesh.geometry import face_areas
 from posefix.mesh.harmonic import harmonic_extension
-from posefix.mesh.intersections import intersecting_faces, new_pairs, self_intersecting_pairs
+from posefix.mesh.intersections import intersecting_faces, self_intersecting_pairs
 from posefix.mesh.rotations import polar_decomposition
 from posefix.mesh.sparse import factorized
 from posefix.mesh.topology import vertex_adjacency
@@ -112,13 +112,14 @@ class MedialRepair:
         self.adjacency = vertex_adjacency(F, len(V))
         self.graph = edge_graph(V, F)
         self.reference_pairs = self_intersecting_pairs(V, F)
+        self.reference_faces = intersecting_faces(self.reference_pairs, len(F))
         self._frames_inv = np.linalg.inv(triangle_frames(V, F)[0])
         self._area = face_areas(V, F)
         self._cotangent = (0.5 * self.rec.L).tocsr()  # cot alpha + cot beta over 2 per edge, positive diagonal
 
     def new_faces(self, X):
-        """Faces of ``X`` in an intersecting pair the reference does not have, (m,) bool."""
-        return intersecting_faces(new_pairs(self_intersecting_pairs(X, self.F), self.reference_pairs), len(self.F))
+        """Faces of ``X`` that intersect and do not intersect in the reference (S0's *new*), (m,) bool."""
+        return self.all_faces(X) & ~self.reference_faces
 
     def all_faces(self, X):
         """Faces of ``X`` in any intersecting pair, (m,) bool."""
