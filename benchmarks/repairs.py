@@ -11,6 +11,7 @@ Gauss-Newton runs converged and their iterations, seconds per pose.
 import argparse
 import json
 import os
+import shutil
 import subprocess
 import sys
 import time
@@ -19,6 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from posefix.pipeline.timings import benchmark_seconds
+from posefix.report.tables import repair_seconds
 
 ROOT = Path(__file__).resolve().parents[1]
 DATA = Path(os.environ.get("POSEFIX_DATA", ROOT.parent / "shared" / "data"))
@@ -26,13 +28,15 @@ LIBRARIES = ("lion-poses", "cat-poses", "horse-poses")
 CHECK_BASELINES = "downstream={'baselines': True}"
 
 
-def run_library(lib, cores):
-    """Run the pipeline on ``lib`` (None: the demo) with the check towards the baselines; its summary entries."""
+def run_library(lib, cores, out):
+    """Run the pipeline on ``lib`` (None: the demo) with the check towards the baselines; its summary entries
+    (its summary.md goes to ``out``/summary-<library>.md)."""
     name = lib.name if lib else "demo"
     config = [f"library={lib}"] if lib else []
     cmd = [sys.executable, "-m", "snakemake", "--cores", str(cores), "--config", *config, CHECK_BASELINES]
     print("+", " ".join(cmd), flush=True)
     subprocess.run(cmd, cwd=ROOT, check=True)
+    shutil.copyfile(ROOT / "reports" / name / "summary.md", out / f"summary-{name}.md")
     return json.loads((ROOT / "reports" / name / "summary.json").read_text())["poses"]
 
 
@@ -46,7 +50,7 @@ def gauss_newton(downstream, example):
 def method_rows(entries):
     """Per method (S0, medial): the figures of one library over its poses (dict of dicts)."""
     s0 = [{"clean": e["intersecting_faces"]["repaired_new"] == e["intersecting_faces"]["repaired_new_in_fallback"],
-           "new": e["intersecting_faces"]["repaired_new"], "deviation": e["deviation"], "seconds": e["seconds_total"],
+           "new": e["intersecting_faces"]["repaired_new"], "deviation": e["deviation"], "seconds": repair_seconds(e),
            "gn": gauss_newton(e["downstream"], "repaired"), "gn_target": gauss_newton(e["downstream"], "original")}
           for e in entries]
     medial = [{"clean": b["intersecting_faces"]["repaired_new"] == 0, "new": b["intersecting_faces"]["repaired_new"],
@@ -104,7 +108,7 @@ def main():
     result = {"libraries": {}}
     for lib in libraries:
         name = lib.name if lib else "demo"
-        rows = method_rows(run_library(lib, args.cores))
+        rows = method_rows(run_library(lib, args.cores, out))
         rows["skeleton_seconds"] = benchmark_seconds(ROOT / "results" / name / "benchmarks", "skeleton") or 0.0
         result["libraries"][name] = rows
     result["seconds"] = time.perf_counter() - start
