@@ -17,9 +17,10 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 
-from posefix.mesh.rotations import polar_decomposition
+from posefix.mesh.harmonic import harmonic_extension
+from posefix.mesh.rotations import polar_decomposition, rotation_exp, rotation_log
 from posefix.mesh.sparse import factorized
-from posefix.volumetric.operators import differential_coordinates, tet_gradient_operator, tet_mass
+from posefix.volumetric.operators import differential_coordinates, tet_adjacency, tet_gradient_operator, tet_mass
 
 log = logging.getLogger(__name__)
 
@@ -83,6 +84,9 @@ class VolumetricEditor:
         Per-tet stiffness (S4 scales ``G_j`` and ``g_j``; here their squares scale the volumes).
     rotation : str
         Rotation extraction, see :data:`ROTATIONS`.
+    regions : sequence of (k,) int, optional
+        Region handles as tet ids (S4 §2.3.1): their vertices must be among ``handles``; :meth:`solve` can
+        impose their orientation, which S4's rotation interpolation then spreads over the other tets.
 
     Examples
     --------
@@ -90,12 +94,16 @@ class VolumetricEditor:
     >>> result = editor.solve(np.r_[X[fixed], X[moved] + [0, 1, 0]], iterations=10)  # doctest: +SKIP
     """
 
-    def __init__(self, X, T, handles, rigid=(), stiffness=None, rotation="svd"):
+    def __init__(self, X, T, handles, rigid=(), stiffness=None, rotation="svd", regions=()):
         if rotation not in ROTATIONS:
             raise ValueError(f"rotation extraction {rotation!r}: one of {ROTATIONS}")
         self.X, self.T, self.rotation = np.asarray(X, dtype=float), np.asarray(T), rotation
         self.handles = np.asarray(handles, dtype=np.int64)
         self.rigid = [np.asarray(r, dtype=np.int64) for r in rigid]
+        self.regions = [np.asarray(r, dtype=np.int64) for r in regions]
+        if any(not np.isin(self.T[r], self.handles).all() for r in self.regions):
+            raise ValueError("a region handle has vertices that are not handles")
+        self._adjacency = tet_adjacency(self.T) if self.regions else None
         self.G = tet_gradient_operator(self.X, self.T)
         self.D = tet_mass(self.X, self.T, None if stiffness is None else np.asarray(stiffness) ** 2)
         self._volumes = self.D.diagonal()[::3]
@@ -154,15 +162,34 @@ class VolumetricEditor:
             R[tets] = polar_decomposition((self._volumes[tets, None, None] * R[tets]).sum(axis=0)[None])[0][0]
         return R
 
-    def solve(self, targets, iterations=10, warm_start=None):
+    def interpolate_rotations(self, R, region_rotations):
+        """S4's rotation interpolation: the region handles turned to ``region_rotations`` (r, 3, 3), the change
+        relative to their current estimate in ``R`` (the previous frame's) blended harmonically over the tets as
+        rotation vectors and applied to ``R``: only the small change of one frame is averaged, S4's fix for
+        turns beyond 180 degrees."""
+        known = np.zeros(len(self.T), dtype=bool)
+        omega = np.zeros((len(self.T), 3))
+        for tets, target in zip(self.regions, region_rotations):
+            current = polar_decomposition(R[tets].sum(axis=0)[None])[0][0]
+            omega[tets] = rotation_log((target @ current.T)[None])[0]
+            known[tets] = True
+        R = rotation_exp(harmonic_extension(self._adjacency, omega, known)) @ R
+        for tets, target in zip(self.regions, region_rotations):
+            R[tets] = target
+        return R
+
+    def solve(self, targets, iterations=10, warm_start=None, region_rotations=None):
         """Deform towards handle ``targets`` (h, 3): the linear solve, then ``iterations`` S4 iterations.
 
         ``warm_start``: per-tet rotations (t, 3, 3) to start from (e.g. the previous result's, for the next
-        frame of an interaction); default the identity.
+        frame of an interaction); default the identity. ``region_rotations`` (r, 3, 3): orientations of the
+        region handles; their change from ``warm_start`` is interpolated over the mesh first.
         """
         start = time.perf_counter()
         targets = np.asarray(targets, dtype=float).reshape(-1, 3)
         R = np.broadcast_to(np.eye(3), (len(self.T), 3, 3)).copy() if warm_start is None else warm_start.copy()
+        if region_rotations is not None:
+            R = self.interpolate_rotations(R, region_rotations)
         shear = []
         for k in range(iterations + 1):
             X = self.linear_solve(targets, R)

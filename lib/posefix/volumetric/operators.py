@@ -63,6 +63,18 @@ def tet_laplacian(X, T, weights=None):
     return (G.T @ tet_mass(X, T, weights) @ G).tocsc()
 
 
+def tet_adjacency(T):
+    """Tets sharing a face, (t, t) sparse bool (symmetric)."""
+    faces = np.sort(np.concatenate([T[:, [1, 2, 3]], T[:, [0, 2, 3]], T[:, [0, 1, 3]], T[:, [0, 1, 2]]]), axis=1)
+    owner = np.tile(np.arange(len(T)), 4)
+    order = np.lexsort(faces.T[::-1])
+    faces, owner = faces[order], owner[order]
+    shared = np.flatnonzero((faces[1:] == faces[:-1]).all(axis=1))
+    a, b = owner[shared], owner[shared + 1]
+    A = sp.coo_matrix((np.ones(len(a), dtype=bool), (a, b)), shape=(len(T), len(T)))
+    return (A + A.T).tocsr()
+
+
 def differential_coordinates(G, D, gradients):
     """``delta = G^T D g`` (S4 Eq. 2.5) for per-tet coordinate gradients ``g`` (t, 3, 3), (n, 3) float.
 
