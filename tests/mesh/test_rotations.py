@@ -2,8 +2,8 @@
 
 import numpy as np
 
-from posefix.mesh.rotations import (kabsch, polar_decomposition, rotation_angle_between, rotation_exp, rotation_log,
-                                    unwrap_rotation_vectors)
+from posefix.mesh.rotations import (cofactors, kabsch, polar_decomposition, polar_rotations, rotation_angle_between,
+                                    rotation_exp, rotation_log, unwrap_rotation_vectors)
 
 
 def _random_rotations(rng, k):
@@ -20,6 +20,16 @@ def test_polar_decomposition_reconstructs_and_is_proper():
     assert np.allclose(np.linalg.det(R), 1.0)
     assert np.allclose(R @ np.transpose(R, (0, 2, 1)), np.eye(3), atol=1e-12)
     assert np.allclose(S, np.transpose(S, (0, 2, 1)), atol=1e-12)
+
+
+def test_polar_rotations_by_newton_equal_the_svd_factor_and_handle_reflections():
+    rng = np.random.default_rng(3)
+    J = rotation_exp(rng.normal(size=(200, 3))) @ (np.eye(3) + 0.4 * rng.normal(size=(200, 3, 3)))
+    J[:5] *= -1.0  # det < 0: reflections
+    R = polar_rotations(J)
+    assert np.abs(R - polar_decomposition(J)[0]).max() < 1e-10
+    assert np.abs(np.linalg.det(R) - 1.0).max() < 1e-12
+    assert np.abs(cofactors(J) - np.linalg.det(J)[:, None, None] * np.linalg.inv(J).transpose(0, 2, 1)).max() < 1e-9
 
 
 def test_exp_log_round_trip_including_near_zero_and_pi():

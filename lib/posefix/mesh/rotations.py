@@ -31,6 +31,47 @@ def polar_decomposition(J):
     return R, S
 
 
+def cofactors(H):
+    """Cofactor matrices ``det(H) H^-T`` of 3x3 matrices (rows: cross products of row pairs), (m, 3, 3)."""
+    r0, r1, r2 = H[:, 0], H[:, 1], H[:, 2]
+    return np.stack([np.cross(r1, r2), np.cross(r2, r0), np.cross(r0, r1)], axis=1)
+
+
+def polar_rotations(J, tol=1e-13, max_steps=30):
+    """Rotation factors of the polar decomposition ``J = R S``, by scaled Newton iteration (Higham 1986).
+
+    ``H <- (g H + H^-T / g) / 2`` with ``g = (|H^-1| / |H|)^(1/2)`` (Frobenius), the inverse from closed-form
+    cofactors: the same ``R`` as :func:`polar_decomposition` to rounding, many times faster for large
+    batches. Matrices with ``det J <= 0`` take :func:`polar_decomposition` (the reflection moved into ``S``).
+
+    Parameters
+    ----------
+    J : (m, 3, 3) float
+    tol : float
+        Stop when no entry changes by more than this in a step.
+    max_steps : int
+
+    Returns
+    -------
+    (m, 3, 3) float
+    """
+    H = np.array(J, dtype=float)
+    flipped = np.linalg.det(H) <= 0
+    H[flipped] = np.eye(3)
+    for _ in range(max_steps):
+        C = cofactors(H)
+        inv_t = C / np.einsum("mij,mij->m", H[:, :1], C[:, :1])[:, None, None]  # det = row 0 . cofactor row 0
+        g = np.sqrt(np.linalg.norm(inv_t, axis=(1, 2)) / np.linalg.norm(H, axis=(1, 2)))[:, None, None]
+        H_next = 0.5 * (g * H + inv_t / g)
+        done = np.abs(H_next - H).max() <= tol
+        H = H_next
+        if done:
+            break
+    if flipped.any():
+        H[flipped] = polar_decomposition(J[flipped])[0]
+    return H
+
+
 def rotation_log(R):
     """Rotation vectors of rotation matrices, angle in [0, pi].
 

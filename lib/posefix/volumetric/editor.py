@@ -18,30 +18,32 @@ import numpy as np
 import scipy.sparse as sp
 
 from posefix.mesh.harmonic import harmonic_extension
-from posefix.mesh.rotations import polar_decomposition, rotation_exp, rotation_log
+from posefix.mesh.rotations import cofactors, polar_decomposition, polar_rotations, rotation_exp, rotation_log
 from posefix.mesh.sparse import factorized
 from posefix.volumetric.operators import differential_coordinates, tet_adjacency, tet_gradient_operator, tet_mass
 
 log = logging.getLogger(__name__)
 
-ROTATIONS = ("svd", "average")
-"""Rotation extraction: the SVD polar factor, or S4's averaging with the inverse transpose (Eq. 2.8)."""
+ROTATIONS = ("polar", "average")
+"""Rotation extraction: the polar factor (scaled Newton, :func:`~posefix.mesh.rotations.polar_rotations`), or
+S4's averaging with the inverse transpose (Eq. 2.8: three steps and row normalisation)."""
 
 
 def averaged_rotations(A, steps=3):
     """S4 Eq. 2.8: ``H <- (H + H^-T) / 2`` ``steps`` times, rows normalized, reflections negated, (t, 3, 3)."""
     H = A.copy()
     for _ in range(steps):
-        H = 0.5 * (H + np.linalg.inv(H).transpose(0, 2, 1))
+        C = cofactors(H)
+        H = 0.5 * (H + C / np.einsum("mij,mij->m", H[:, :1], C[:, :1])[:, None, None])
     H /= np.linalg.norm(H, axis=2, keepdims=True)
     H[np.linalg.det(H) < 0] *= -1.0
     return H
 
 
-def extract_rotations(A, method="svd"):
+def extract_rotations(A, method="polar"):
     """Rotations (t, 3, 3) of the per-tet transformations ``A`` (t, 3, 3): see :data:`ROTATIONS`."""
-    if method == "svd":
-        return polar_decomposition(A)[0]
+    if method == "polar":
+        return polar_rotations(A)
     if method == "average":
         return averaged_rotations(A)
     raise ValueError(f"rotation extraction {method!r}: one of {ROTATIONS}")
@@ -94,7 +96,7 @@ class VolumetricEditor:
     >>> result = editor.solve(np.r_[X[fixed], X[moved] + [0, 1, 0]], iterations=10)  # doctest: +SKIP
     """
 
-    def __init__(self, X, T, handles, rigid=(), stiffness=None, rotation="svd", regions=()):
+    def __init__(self, X, T, handles, rigid=(), stiffness=None, rotation="polar", regions=()):
         if rotation not in ROTATIONS:
             raise ValueError(f"rotation extraction {rotation!r}: one of {ROTATIONS}")
         self.X, self.T, self.rotation = np.asarray(X, dtype=float), np.asarray(T), rotation
@@ -202,6 +204,6 @@ class VolumetricEditor:
         return EditResult(X, R, np.array(shear), time.perf_counter() - start)
 
 
-def edit(X, T, handles, targets, iterations=10, rigid=(), stiffness=None, rotation="svd"):
+def edit(X, T, handles, targets, iterations=10, rigid=(), stiffness=None, rotation="polar"):
     """One-off :meth:`VolumetricEditor.solve`: an :class:`EditResult`."""
     return VolumetricEditor(X, T, handles, rigid, stiffness, rotation).solve(targets, iterations)
