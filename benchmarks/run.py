@@ -5,7 +5,7 @@ absent, which the report says). Pieces: the self-intersection detector against p
 (benchmarks/detector.py) on every key frame, the RBF fit variants on the first pose with the scipy
 peer check (benchmarks/fit.py), the OpenCL integration of every lion pose against numpy on two
 (benchmarks/integrate.py), the repair and the downstream check (each library's summary.json), S1's skeletal
-deformation next to S1 Fig. 12-13 (benchmarks/skeletal.py, which also runs alone), and S0 vs the medial
+deformation next to S1 Fig. 12-13 (benchmarks/skeletal.py, which also runs alone), S0 vs the medial
 repair on every pose (benchmarks/repairs.py, which also runs alone; the pipeline runs with the downstream
 check towards both repairs), and S4's volumetric editing next to S4 Table 3.1 (benchmarks/volumetric.py, which
 also runs alone). Everything is collected into

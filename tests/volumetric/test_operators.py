@@ -52,3 +52,16 @@ def test_the_grid_fills_its_box_with_positive_tets():
     X, T = tet_grid((3, 4, 5), (3.0, 2.0, 1.0))
     volumes = tet_volumes(X, T)
     assert len(T) == 6 * 60 and np.all(volumes > 0) and volumes.sum() == pytest.approx(6.0, rel=1e-12)
+
+
+def test_embedded_points_follow_an_affine_map_exactly_inside_and_outside():
+    from posefix.volumetric.embedding import barycentric_embedding, embedded_points
+    X, T = tet_grid((4, 2, 2), (4.0, 1.0, 1.0))
+    rng = np.random.default_rng(2)
+    P = np.column_stack([rng.uniform(-0.2, 4.2, 300), rng.uniform(-0.1, 1.1, 300), rng.uniform(0, 1, 300)])
+    tets, weights = barycentric_embedding(X, T, P)
+    assert np.allclose(weights.sum(axis=1), 1.0) and np.abs(embedded_points(X, T, tets, weights) - P).max() < 1e-12
+    inside = (P[:, 0] > 0) & (P[:, 0] < 4) & (P[:, 1] > 0) & (P[:, 1] < 1)
+    assert np.all(weights[inside].min(axis=1) >= -1e-12)  # the containing tet
+    A = np.array([[1.0, 0.3, 0], [0, 2, 0], [0.1, 0, 1]])
+    assert np.abs(embedded_points(X @ A.T, T, tets, weights) - P @ A.T).max() < 1e-12
