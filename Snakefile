@@ -6,7 +6,8 @@
 #   then summary and overview over all poses. Beside S0, per pose, the baseline repairs of config
 #   `baselines` (rules/baselines.smk: skeleton -> repair_medial -> export_medial, S1's medial balls). `snakemake --report reports/<library>/report.html`
 #   collects the report() outputs (captions in rules/captions/).
-# Beside it, `snakemake author` (rules/skeletal.smk, S1) authors a pose library from a rig file.
+# Beside it, `snakemake author` (rules/skeletal.smk, S1) authors a pose library from a rig file, and
+# `snakemake author_volumetric` (rules/volumetric.smk, S4) from a pose script of handle moves.
 # Rules (rules/<topic>.smk) only wire stage scripts (stages/<rule>.py); the math is in lib/posefix/.
 from snakemake.utils import min_version
 
@@ -24,6 +25,7 @@ include: "rules/check.smk"
 include: "rules/report.smk"
 include: "rules/baselines.smk"
 include: "rules/skeletal.smk"
+include: "rules/volumetric.smk"
 
 
 report: "rules/captions/workflow.rst"

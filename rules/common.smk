@@ -33,7 +33,7 @@ def _typed(value):
 
 
 for _section in ("demo", "keyframes", "classify", "constraints", "fit", "integrate", "verify", "downstream",
-                 "skeletal_pose", "repair_medial"):
+                 "skeletal_pose", "repair_medial", "volumetric_pose"):
     if isinstance(config.get(_section), dict):
         config[_section] = _typed(config[_section])
 if isinstance(config.get("baselines"), str):  # --config baselines=medial, baselines=[] or baselines=a,b

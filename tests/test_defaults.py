@@ -27,6 +27,8 @@ from posefix.skeletal.repair import MedialRepair, medial_repair
 from posefix.skeletal.rig import skinning_weights
 from posefix.skeletal.skeletal_mesh import skeletal_mesh
 from posefix.spacetime.classification import constraint_mask
+from posefix.volumetric.authoring import VolumetricPoser
+from posefix.volumetric.tet_mesh import tet_mesh
 from posefix.spacetime.constraints import knot_tangents, spacetime_constraints
 from posefix.spacetime.fit import FitSettings
 from posefix.spacetime.integration import rk45
@@ -92,6 +94,9 @@ LIBRARY = {
     **{("repair_medial", key): [(MedialRepair, key, None), (medial_repair, key, None)]
        for key in ("tau", "neighbours", "max_reach")},
     ("repair_medial", "max_iters"): [(MedialRepair.repair, "max_iters", None), (medial_repair, "max_iters", None)],
+    ("volumetric_pose", "tet_vertices"): [(tet_mesh, "surface_vertices", None)],
+    ("volumetric_pose", "iterations"): [(VolumetricPoser.pose, "iterations", None)],
+    ("volumetric_pose", "frames"): [(VolumetricPoser.pose, "frames", None)],
 }
 # relative to the bbox diagonal in the config, lengths in the library: the library has no default
 RELATIVE = {
@@ -105,7 +110,8 @@ RELATIVE = {
     ("repair_medial", "margin"): [(MedialRepair, "margin"), (medial_repair, "margin")],
 }
 WORKFLOW_ONLY = {("demo", "folder"), ("classify", "exclude"), ("integrate", "device"), ("skeletal_pose", "rig"),
-                 ("skeletal_pose", "mesh"), ("skeletal_pose", "out"), ("downstream", "baselines")} | {
+                 ("skeletal_pose", "mesh"), ("skeletal_pose", "out"), ("downstream", "baselines"),
+                 ("volumetric_pose", "script"), ("volumetric_pose", "mesh"), ("volumetric_pose", "out")} | {
     (section, "threads") for section, value in CONFIG.items() if isinstance(value, dict) and "threads" in value}
 """Keys of the workflow (paths, per-pose inputs, rule threads) or of a stage only (the OpenCL device choice)."""
 

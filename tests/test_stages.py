@@ -13,7 +13,8 @@ from posefix import __version__
 from posefix.pipeline.artifacts import config_hash, inputs_hash
 
 STAGES = ["demo", "validate", "keyframes", "classify", "constraints", "fit", "integrate", "verify", "export",
-          "downstream", "summary", "render", "overview", "skeletal_pose", "skeleton", "repair_medial"]
+          "downstream", "summary", "render", "overview", "skeletal_pose", "skeleton", "repair_medial",
+          "volumetric_pose"]
 
 
 def documented_datasets():

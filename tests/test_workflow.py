@@ -285,3 +285,20 @@ def test_author_a_library_from_the_demo_rig_and_repair_it(tmp_path):
     entry = json.loads((tmp_path / "reports" / "demo-limb" / "summary.json").read_text())["poses"][0]
     assert entry["pose"] == "demo-02-flow" and entry["intersecting_faces"]["repaired_new"] == 0
     assert (tmp_path / "results" / "demo-limb" / "repaired" / "demo-02-flow.obj").exists()
+
+
+def test_author_a_library_from_the_demo_pose_script_and_repair_it(tmp_path):
+    """`snakemake author_volumetric` (S4: the demo pose script -> vol-bend, vol-fold, vol-twist), then the S0
+    repair of the folded one, with the medial repair beside it."""
+    import json
+    proc = snakemake(tmp_path, "author_volumetric", "--config", "volumetric_pose={'tet_vertices': 400}")
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    library = tmp_path / "data" / "authored" / "demo-limb-volumetric"
+    names = sorted(p.name for p in library.iterdir() if not p.name.startswith("."))
+    assert names == ["demo-limb-volumetric-reference.obj", "vol-bend.obj", "vol-fold.obj", "vol-twist.obj"]
+    proc = snakemake(tmp_path, "--config", f"library={library}", "poses=vol-fold")
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    entry = json.loads((tmp_path / "reports" / "demo-limb-volumetric" / "summary.json").read_text())["poses"][0]
+    assert entry["pose"] == "vol-fold" and entry["intersecting_faces"]["target"] > 0
+    assert entry["intersecting_faces"]["repaired_new"] == entry["intersecting_faces"]["repaired_new_in_fallback"]
+    assert (tmp_path / "results" / "demo-limb-volumetric" / "repaired" / "vol-fold.obj").exists()
