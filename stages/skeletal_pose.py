@@ -19,13 +19,12 @@ from posefix.mesh.geometry import bbox_diagonal
 from posefix.mesh.intersections import intersecting_faces, self_intersecting_pairs
 from posefix.pipeline.artifacts import write_artifact
 from posefix.pipeline.cli import library_defaults, run_stage, stage_parser
-from posefix.pipeline.errors import InputError
 from posefix.pipeline.library import read_reference
 from posefix.pipeline.meshes import mesh_file, write_like
 from posefix.pipeline.rigs import read_rig
+from posefix.pipeline.skeletons import add_skeleton_options, reference_skeleton
 from posefix.pipeline.timings import Timings
 from posefix.skeletal.authoring import VARIANTS, SkeletalPoser, union_error
-from posefix.skeletal.skeletal_mesh import skeletal_mesh
 
 DOCS = {
     "skeleton/S": ("length", "skeletal mesh vertices (medial-ball centres), (n, 3) float64"),
@@ -40,20 +39,13 @@ DOCS = {
 
 def build_parser():
     parser = stage_parser("skeletal_pose", __doc__)
-    mesh_defaults, poser, flow = (library_defaults(f) for f in (skeletal_mesh, SkeletalPoser, SkeletalPoser.author))
+    poser, flow = (library_defaults(f) for f in (SkeletalPoser, SkeletalPoser.author))
     parser.add_argument("--mesh", required=True, help="reference mesh (.obj/.ply/.off, optionally .gz)")
     parser.add_argument("--rig", required=True, help="rig file (YAML: joints and poses, see rigs/demo-limb.yaml)")
     parser.add_argument("--out", required=True, help="folder of the authored pose library")
     parser.add_argument("--artifact", required=True, help="HDF5 file of the skeletal mesh and the metrics")
     parser.add_argument("--name", default=None, help="library name: files <name>-reference.*; default the rig's")
-    parser.add_argument("--medial", choices=("poles", "shrinking_ball", "auto"), default=mesh_defaults["medial"],
-                        help="medial-ball centres: Voronoi poles (S1), shrinking balls, or poles, bad ones replaced")
-    parser.add_argument("--tol", type=float, default=mesh_defaults["tol"],
-                        help="a ball crossing the surface by more than tol x its radius counts as bad")
-    parser.add_argument("--smooth-iters", type=int, default=mesh_defaults["smooth_iters"],
-                        help="iterations of the gated bi-Laplacian flow on the skeletal mesh (S1 §2)")
-    parser.add_argument("--smooth-step", type=float, default=mesh_defaults["smooth_step"],
-                        help="step of that flow")
+    add_skeleton_options(parser)
     parser.add_argument("--falloff", type=float, default=poser["falloff"],
                         help="skinning blend length / mean bone length")
     parser.add_argument("--min-sine", type=float, default=poser["min_sine"],
@@ -78,11 +70,7 @@ def main(args, log):
     log.info("%s: %d vertices, %d faces; rig %s: %d joints, %d poses", args.mesh, len(V), len(F), args.rig,
              len(rig.names), len(poses))
     with timings.step("skeleton"):
-        skeleton = skeletal_mesh(V, F, medial=args.medial, tol=args.tol, smooth_iters=args.smooth_iters,
-                                 smooth_step=args.smooth_step)
-    missing = int((~np.isfinite(skeleton.S).all(axis=1)).sum())
-    if missing:
-        raise InputError(args.mesh, f"no medial ball for {missing} vertices with --medial {args.medial}; use auto")
+        skeleton = reference_skeleton(args.mesh, V, F, args)
     with timings.step("prepare"):
         poser = SkeletalPoser(V, F, skeleton.S, rig, args.falloff, args.min_sine, args.min_area)
     margin = bbox_diagonal(V) * args.margin

@@ -9,11 +9,10 @@ import posefix  # noqa: F401  (runtime defaults before numpy)
 import numpy as np
 
 from posefix.pipeline.artifacts import write_artifact
-from posefix.pipeline.cli import library_defaults, run_stage, stage_parser
-from posefix.pipeline.errors import InputError
+from posefix.pipeline.cli import run_stage, stage_parser
 from posefix.pipeline.library import read_reference
+from posefix.pipeline.skeletons import add_skeleton_options, reference_skeleton
 from posefix.pipeline.timings import Timings
-from posefix.skeletal.skeletal_mesh import skeletal_mesh
 
 DOCS = {
     "S": ("length", "skeletal mesh vertices (medial-ball centres), (n, 3) float64"),
@@ -25,16 +24,9 @@ DOCS = {
 
 def build_parser():
     parser = stage_parser("skeleton", __doc__)
-    defaults = library_defaults(skeletal_mesh)
     parser.add_argument("--reference", required=True, help="reference mesh (.obj/.ply/.off, optionally .gz)")
     parser.add_argument("--out", required=True, help="skeleton.h5 to write")
-    parser.add_argument("--medial", choices=("poles", "shrinking_ball", "auto"), default=defaults["medial"],
-                        help="medial-ball centres: Voronoi poles (S1), shrinking balls, or poles, bad ones replaced")
-    parser.add_argument("--tol", type=float, default=defaults["tol"],
-                        help="a ball crossing the surface by more than tol x its radius counts as bad")
-    parser.add_argument("--smooth-iters", type=int, default=defaults["smooth_iters"],
-                        help="iterations of the gated bi-Laplacian flow on the skeletal mesh (S1 §2)")
-    parser.add_argument("--smooth-step", type=float, default=defaults["smooth_step"], help="step of that flow")
+    add_skeleton_options(parser)
     return parser
 
 
@@ -43,12 +35,7 @@ def main(args, log):
     with timings.step("read"):
         V, F = read_reference(args.reference)
     with timings.step("skeleton"):
-        skeleton = skeletal_mesh(V, F, medial=args.medial, tol=args.tol, smooth_iters=args.smooth_iters,
-                                 smooth_step=args.smooth_step)
-    missing = int((~np.isfinite(skeleton.S).all(axis=1)).sum())
-    if missing:
-        raise InputError(args.reference, f"no medial ball for {missing} vertices with --medial {args.medial}; "
-                                         "use auto")
+        skeleton = reference_skeleton(args.reference, V, F, args)
     log.info("skeletal mesh of %d vertices: %d bad centres", len(V), int(skeleton.bad.sum()))
     datasets = {"S": skeleton.S, "R": skeleton.R, "source": np.asarray(skeleton.source, dtype=np.int8),
                 "bad": skeleton.bad}

@@ -1,4 +1,4 @@
-"""Writing files atomically (temporary name, then rename), file hashes, and figures as PNG files."""
+"""Writing files atomically (temporary name, then rename), file hashes, figures as PNG files, YAML inputs."""
 
 import hashlib
 import io
@@ -6,6 +6,10 @@ import os
 import tempfile
 from contextlib import contextmanager
 from pathlib import Path
+
+import yaml
+
+from posefix.pipeline.errors import InputError
 
 
 @contextmanager
@@ -61,3 +65,15 @@ def file_sha256(path):
         for block in iter(lambda: fh.read(1 << 20), b""):
             h.update(block)
     return h.hexdigest()
+
+
+def read_yaml(path):
+    """The YAML document of a file (rig files, pose scripts); :class:`InputError` naming it when it cannot be
+    opened or parsed."""
+    try:
+        with open(path, encoding="utf-8") as fh:
+            return yaml.safe_load(fh)
+    except OSError as exc:
+        raise InputError(path, f"cannot be opened: {exc.strerror or exc}") from None
+    except yaml.YAMLError as exc:
+        raise InputError(path, f"not valid YAML: {str(exc).splitlines()[0]}") from None

@@ -13,9 +13,9 @@ Format (``poses/demo-limb-volumetric.yaml``)::
 from dataclasses import dataclass
 
 import numpy as np
-import yaml
 
 from posefix.pipeline.errors import InputError
+from posefix.pipeline.files import read_yaml
 
 
 @dataclass
@@ -37,13 +37,7 @@ class PoseScript:
 
 def read_pose_script(path):
     """Read a pose script (see the module text); raises :class:`InputError` naming the file and the problem."""
-    try:
-        with open(path, encoding="utf-8") as fh:
-            doc = yaml.safe_load(fh)
-    except OSError as exc:
-        raise InputError(path, f"cannot be opened: {exc.strerror or exc}") from None
-    except yaml.YAMLError as exc:
-        raise InputError(path, f"not valid YAML: {str(exc).splitlines()[0]}") from None
+    doc = read_yaml(path)
     if not isinstance(doc, dict) or not doc.get("handles") or not doc.get("poses"):
         raise InputError(path, "needs 'handles' and 'poses' (see poses/demo-limb-volumetric.yaml)")
     handles = {str(n): _box(path, f"handle '{n}'", s) for n, s in doc["handles"].items()}

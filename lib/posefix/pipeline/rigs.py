@@ -10,9 +10,9 @@
 """
 
 import numpy as np
-import yaml
 
 from posefix.pipeline.errors import InputError
+from posefix.pipeline.files import read_yaml
 from posefix.skeletal.rig import Rig, pose_from_rotation_vectors
 
 
@@ -35,13 +35,7 @@ def read_rig(path):
         Unreadable file, not YAML, no joints or poses, a joint without a position, an unknown or cyclic
         parent, not exactly one root, a pose naming an unknown joint, or a malformed rotation.
     """
-    try:
-        with open(path, encoding="utf-8") as fh:
-            doc = yaml.safe_load(fh)
-    except OSError as exc:
-        raise InputError(path, f"cannot be opened: {exc.strerror or exc}") from None
-    except yaml.YAMLError as exc:
-        raise InputError(path, f"not valid YAML: {str(exc).splitlines()[0]}") from None
+    doc = read_yaml(path)
     if not isinstance(doc, dict) or not doc.get("joints") or not doc.get("poses"):
         raise InputError(path, "needs 'joints' and 'poses' (see rigs/demo-limb.yaml)")
     rig = _rig(path, doc["joints"])

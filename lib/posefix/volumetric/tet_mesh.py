@@ -45,7 +45,7 @@ def interior_grid(V, F, S, spacing, seed=0):
     return points[clear]
 
 
-def tet_mesh(V, F, surface_vertices=1000):
+def tet_mesh(V, F, surface_vertices=2500):
     """Coarse tet mesh of the surface ``(V, F)``.
 
     Parameters
