@@ -32,3 +32,13 @@ def test_the_tets_fill_the_surface_s_volume(limb):
     V, F, (X, T) = limb
     assert tet_volumes(X, T).sum() == pytest.approx(enclosed_volume(V, F), rel=0.05)
     assert 250 <= np.sum(np.isin(np.arange(len(X)), T)) and len(X) < 2 * 300 + 400
+
+
+def test_the_lion_reference_with_its_self_intersections_gets_the_same_tets_twice():
+    from conftest import shared_library
+    from posefix.pipeline.meshes import read_mesh
+    V, F = read_mesh(shared_library("lion-poses") / "lion-reference.obj")
+    X, T = tet_mesh(V, F)
+    X2, T2 = tet_mesh(V, F)
+    assert np.array_equal(X, X2) and np.array_equal(T, T2) and np.all(tet_volumes(X, T) > 0)
+    assert 15000 < len(T) < 30000
