@@ -50,6 +50,26 @@ def build_parser():
     return parser
 
 
+def _handles(path, script, V, X, T):
+    """Region handles and rigid regions as tet ids ({"handle": ..., "rigid region": ...}), point handles as
+    rest positions; :class:`InputError` naming the script for an empty box or an unknown vertex id."""
+    regions = {"handle": {}, "rigid region": {}}
+    points = {}
+    boxes = [("handle", n, spec) for n, (kind, spec) in script.handles.items() if kind == "box"]
+    for kind, name, box in boxes + [("rigid region", n, b) for n, b in script.rigid.items()]:
+        regions[kind][name] = region_tets(X, T, box)
+        if len(regions[kind][name]) == 0:
+            raise InputError(path, f"{kind} '{name}': no tet lies wholly in its box")
+    for name, (kind, spec) in script.handles.items():
+        if kind == "vertices":
+            if spec.max() >= len(V):
+                raise InputError(path, f"handle '{name}': vertex id {spec.max()} >= {len(V)} vertices")
+            points[name] = V[spec]
+        elif kind == "points":
+            points[name] = spec
+    return regions, points
+
+
 def main(args, log):
     timings = Timings()
     if args.tet_vertices < 4 or args.iterations < 0 or args.frames < 1:
@@ -60,15 +80,9 @@ def main(args, log):
     with timings.step("tets"):
         X, T = tet_mesh(V, F, args.tet_vertices)
     log.info("%s: %d vertices; tet mesh %d vertices, %d tets", args.mesh, len(V), len(X), len(T))
-    regions = {}
-    for kind, boxes in (("handle", script.handles), ("rigid region", script.rigid)):
-        for name, box in boxes.items():
-            regions[(kind, name)] = region_tets(X, T, box)
-            if len(regions[(kind, name)]) == 0:
-                raise InputError(args.script, f"{kind} '{name}': no tet lies wholly in its box")
+    regions, points = _handles(args.script, script, V, X, T)
     with timings.step("prepare"):
-        poser = VolumetricPoser(V, X, T, {n: regions[("handle", n)] for n in script.handles},
-                                {n: regions[("rigid region", n)] for n in script.rigid})
+        poser = VolumetricPoser(V, X, T, regions["handle"], regions["rigid region"], points)
     authored = {}
     for pose, moves in script.poses.items():
         with timings.step(f"pose {pose}"):

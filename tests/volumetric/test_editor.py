@@ -146,3 +146,20 @@ def test_a_cylinder_bent_135_degrees_keeps_its_cross_sections():
     assert np.all(np.linalg.det(editor.transformations(result.X)) > 0)
     linear = editor.solve(targets, 0)
     assert np.any(np.linalg.det(editor.transformations(linear.X)) <= 0)
+
+
+def test_point_handles_inside_the_mesh_reach_their_targets_exactly(bar):
+    """S4 §2.3.1: handles anywhere inside the mesh (markers) as linear combinations of tet vertices."""
+    from posefix.volumetric.embedding import barycentric_embedding, embedded_points
+    X, T, fixed, _ = bar
+    points = np.array([[9.8, 0.5, 0.5], [9.8, 0.1, 0.5], [9.8, 0.5, 0.9], [8.3, 0.37, 0.61]])
+    editor = VolumetricEditor(X, T, fixed, points=points)
+    assert np.abs(editor.solve(X[fixed], 2, point_targets=points).X - X).max() <= 1e-10  # rest
+    turn = rotation_exp(np.array([[0.0, 0.0, np.pi / 2]]))[0]
+    targets = np.array([6.4, 6.4, 0.0]) + (points - [10.0, 0.5, 0.5]) @ turn.T
+    result = editor.solve(X[fixed], 30, point_targets=targets)
+    tets, weights = barycentric_embedding(X, T, points)
+    assert np.abs(embedded_points(result.X, T, tets, weights) - targets).max() <= 1e-9
+    assert result.shear[-1] < result.shear[0] and np.all(np.linalg.det(editor.transformations(result.X)) > 0)
+    with pytest.raises(ValueError, match="point_targets"):
+        editor.solve(X[fixed], 1)

@@ -30,6 +30,7 @@ def test_a_pose_script_reads_boxes_and_moves_in_radians(tmp_path):
     path.write_text(SCRIPT)
     script = read_pose_script(path)
     assert list(script.handles) == ["base", "tip"] and list(script.rigid) == ["middle"]
+    assert script.handles["tip"][0] == "box" and np.allclose(script.handles["tip"][1], [[9.49, -1, -1], [10.01, 2, 2]])
     rotate, translate = script.poses["turn"]["tip"]
     assert np.allclose(rotate, [0, 0, np.pi / 2]) and np.allclose(translate, [-3, 3, 0])
     assert np.allclose(script.poses["turn"]["base"][0], 0.0)
@@ -41,6 +42,8 @@ def test_a_pose_script_reads_boxes_and_moves_in_radians(tmp_path):
     ("handles: {h: {box: [[0, 0, 0], [1, 1, 1]]}}\nposes: {a: {g: {}}}", "unknown handle(s) g"),
     ("handles: {h: {box: [[0, 0, 0], [1, 1, 1]]}}\nposes: {a: {h: {rotate: [1, 2]}}}", "three numbers"),
     ("handles: [", "not valid YAML"),
+    ("handles: {h: {vertices: [1.5]}}\nposes: {a: {}}", "vertex ids"),
+    ("handles: {h: {points: [[1, 2]]}}\nposes: {a: {}}", "list of [x, y, z]"),
 ])
 def test_a_bad_pose_script_is_refused_naming_the_file(tmp_path, text, message):
     path = tmp_path / "bad.yaml"
@@ -56,7 +59,7 @@ def test_a_poser_carries_the_surface_rigidly_and_keeps_the_rigid_region(tmp_path
     path = tmp_path / "s.yaml"
     path.write_text(SCRIPT)
     script = read_pose_script(path)
-    regions = {n: region_tets(X, T, b) for n, b in script.handles.items()}
+    regions = {n: region_tets(X, T, b) for n, (_, b) in script.handles.items()}
     rigid = {n: region_tets(X, T, b) for n, b in script.rigid.items()}
     poser = VolumetricPoser(V, X, T, regions, rigid)
     lifted = poser.pose({"tip": (np.zeros(3), np.zeros(3)), "base": (np.zeros(3), np.zeros(3))}, iterations=2)
@@ -94,3 +97,21 @@ def test_the_stage_authors_the_demo_script_into_a_library(tmp_path):
                      "--out", tmp_path / "lib2", "--artifact", tmp_path / "b.h5", "--tet-vertices", 300, check=False)
     assert proc.returncode == 2 and "far.yaml" in proc.stderr and "no tet lies wholly in its box" in proc.stderr
     assert not (tmp_path / "b.h5").exists()
+
+
+def test_point_handles_by_position_move_with_their_group(tmp_path):
+    X, T = tet_grid((20, 2, 2), (10.0, 1.0, 1.0))
+    path = tmp_path / "s.yaml"
+    path.write_text("handles:\n  base: {box: [[-0.01, -1, -1], [0.51, 2, 2]]}\n"
+                    "  markers: {points: [[9.7, 0.5, 0.5], [9.7, 0.2, 0.3], [9.2, 0.6, 0.7]]}\n"
+                    "poses:\n  up: {markers: {rotate: [0, 90, 0], translate: [-1, 0, 4]}}\n")
+    script = read_pose_script(path)
+    kind, points = script.handles["markers"]
+    assert kind == "points" and points.shape == (3, 3)
+    poser = VolumetricPoser(X[::5], X, T, {"base": region_tets(X, T, script.handles["base"][1])},
+                            points={"markers": points})
+    posed = poser.pose(script.poses["up"], iterations=10)
+    _, _, targets = poser.targets(script.poses["up"])
+    from posefix.volumetric.embedding import barycentric_embedding, embedded_points
+    assert np.abs(embedded_points(posed.edit.X, T, *barycentric_embedding(X, T, points)) - targets).max() < 1e-9
+    assert np.linalg.norm(targets.mean(axis=0) - (points.mean(axis=0) + [-1, 0, 4])) < 1e-12

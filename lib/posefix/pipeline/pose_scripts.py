@@ -4,6 +4,8 @@ Format (``poses/demo-limb-volumetric.yaml``)::
 
     handles:                      # name -> region: the tets whose four vertices lie in an axis-aligned box
       base: {box: [[-3.6, -1, -1], [-2.6, 1, 1]]}          # [min corner, max corner], model units
+      wrist: {vertices: [12, 40, 77]}                      # or point handles: reference vertex ids,
+      marker: {points: [[2.9, 0.1, 0.0]]}                  # or positions inside or near the mesh
     rigid:                        # optional, name -> region (same form): moves rigidly
       forearm: {box: [[1.2, -1, -1], [2.4, 1, 1]]}
     poses:                        # name -> handle -> rotation vector in degrees about the region's rest
@@ -24,8 +26,11 @@ class PoseScript:
 
     Attributes
     ----------
-    handles, rigid : dict of str -> (2, 3) float
-        Boxes (min and max corner) of the handle regions and the rigid regions, in file order.
+    handles : dict of str -> tuple of (str, ndarray)
+        Per handle, in file order: ``("box", (2, 3) float)`` (min and max corner of a region handle),
+        ``("vertices", (k,) int)`` (reference vertex ids) or ``("points", (k, 3) float)`` (point handles).
+    rigid : dict of str -> (2, 3) float
+        Boxes of the rigid regions.
     poses : dict of str -> dict of str -> tuple of ((3,) float, (3,) float)
         Per pose and handle: rotation vector (radians) and translation (model units).
     """
@@ -40,10 +45,27 @@ def read_pose_script(path):
     doc = read_yaml(path)
     if not isinstance(doc, dict) or not doc.get("handles") or not doc.get("poses"):
         raise InputError(path, "needs 'handles' and 'poses' (see poses/demo-limb-volumetric.yaml)")
-    handles = {str(n): _box(path, f"handle '{n}'", s) for n, s in doc["handles"].items()}
+    handles = {str(n): _handle(path, n, s) for n, s in doc["handles"].items()}
     rigid = {str(n): _box(path, f"rigid region '{n}'", s) for n, s in (doc.get("rigid") or {}).items()}
     poses = {str(n): _moves(path, n, s, handles) for n, s in doc["poses"].items()}
     return PoseScript(handles, rigid, poses)
+
+
+def _handle(path, name, spec):
+    if isinstance(spec, dict) and "vertices" in spec:
+        ids = np.asarray(spec["vertices"])
+        if ids.ndim != 1 or len(ids) == 0 or not np.issubdtype(ids.dtype, np.integer) or ids.min() < 0:
+            raise InputError(path, f"handle '{name}': 'vertices' must be a list of vertex ids (integers >= 0)")
+        return "vertices", ids.astype(np.int64)
+    if isinstance(spec, dict) and "points" in spec:
+        try:
+            points = np.asarray(spec["points"], dtype=float)
+            if points.ndim != 2 or points.shape[1:] != (3,) or len(points) == 0 or not np.isfinite(points).all():
+                raise ValueError
+        except (TypeError, ValueError):
+            raise InputError(path, f"handle '{name}': 'points' must be a list of [x, y, z]") from None
+        return "points", points
+    return "box", _box(path, f"handle '{name}'", spec)
 
 
 def _box(path, what, spec):

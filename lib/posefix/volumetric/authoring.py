@@ -46,37 +46,47 @@ class VolumetricPoser:
         Handle regions as tet ids (disjoint vertex sets).
     rigid : dict of str -> (r,) int, optional
         Rigid regions as tet ids.
+    points : dict of str -> (p, 3) float, optional
+        Point handles (rest positions inside or near the tets), a group per name.
     """
 
-    def __init__(self, V, X, T, handles, rigid=None):
+    def __init__(self, V, X, T, handles, rigid=None, points=None):
         self.V, self.X, self.T = V, X, T
         self.names = list(handles)
         self.regions = [np.asarray(handles[n]) for n in self.names]
         self.region_vertices = [np.unique(T[r]) for r in self.regions]
-        vertices = np.concatenate(self.region_vertices)
+        self.points = {n: np.asarray(p, dtype=float).reshape(-1, 3) for n, p in (points or {}).items()}
+        vertices = np.concatenate(self.region_vertices) if self.regions else np.zeros(0, dtype=np.int64)
         if len(np.unique(vertices)) < len(vertices):
             raise ValueError("handle regions share vertices")
-        self.editor = VolumetricEditor(X, T, vertices, rigid=list((rigid or {}).values()), regions=self.regions)
+        self.editor = VolumetricEditor(X, T, vertices, rigid=list((rigid or {}).values()), regions=self.regions,
+                                       points=np.concatenate(list(self.points.values())) if self.points else None)
         self.embedding = barycentric_embedding(X, T, V)
 
     def targets(self, moves, fraction=1.0):
-        """Handle targets (h, 3) and region rotations (r, 3, 3) for ``moves`` {name: (rotvec, translation)}."""
-        targets, rotations = [], []
-        for name, verts in zip(self.names, self.region_vertices):
+        """Targets of the region handles' vertices (h, 3), their rotations (r, 3, 3) and the point handles'
+        targets (p, 3) or None, for ``moves`` {name: (rotation vector, translation)} scaled by ``fraction``."""
+        groups = [(n, self.X[v]) for n, v in zip(self.names, self.region_vertices)] + list(self.points.items())
+        moved, rotations = [], []
+        for name, rest in groups:
             omega, shift = moves.get(name, (np.zeros(3), np.zeros(3)))
             R = rotation_exp(fraction * np.asarray(omega)[None])[0]
-            centre = self.X[verts].mean(axis=0)
-            targets.append(centre + (self.X[verts] - centre) @ R.T + fraction * np.asarray(shift))
+            centre = rest.mean(axis=0)
+            moved.append(centre + (rest - centre) @ R.T + fraction * np.asarray(shift))
             rotations.append(R)
-        return np.concatenate(targets), np.stack(rotations)
+        regions = len(self.names)
+        vertex_targets = np.concatenate(moved[:regions]) if regions else np.zeros((0, 3))
+        point_targets = np.concatenate(moved[regions:]) if self.points else None
+        return vertex_targets, (np.stack(rotations[:regions]) if regions else None), point_targets
 
     def pose(self, moves, iterations=10, frames=4):
         """The surface posed by ``moves`` (see :meth:`targets`), reached in ``frames`` warm-started steps."""
         start = time.perf_counter()
         rotations = None
         for k in range(1, frames + 1):
-            targets, region_rotations = self.targets(moves, k / frames)
-            edit = self.editor.solve(targets, iterations, warm_start=rotations, region_rotations=region_rotations)
+            targets, region_rotations, point_targets = self.targets(moves, k / frames)
+            edit = self.editor.solve(targets, iterations, warm_start=rotations, region_rotations=region_rotations,
+                                     point_targets=point_targets)
             rotations = edit.rotations
         positions = embedded_points(edit.X, self.T, *self.embedding)
         seconds = time.perf_counter() - start

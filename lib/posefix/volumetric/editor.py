@@ -20,6 +20,7 @@ import scipy.sparse as sp
 from posefix.mesh.harmonic import harmonic_extension
 from posefix.mesh.rotations import cofactors, polar_decomposition, polar_rotations, rotation_exp, rotation_log
 from posefix.mesh.sparse import factorized
+from posefix.volumetric.embedding import barycentric_embedding
 from posefix.volumetric.operators import differential_coordinates, tet_adjacency, tet_gradient_operator, tet_mass
 
 log = logging.getLogger(__name__)
@@ -89,6 +90,10 @@ class VolumetricEditor:
     regions : sequence of (k,) int, optional
         Region handles as tet ids (S4 §2.3.1): their vertices must be among ``handles``; :meth:`solve` can
         impose their orientation, which S4's rotation interpolation then spreads over the other tets.
+    points : (p, 3) float, optional
+        Point handles anywhere inside or near the mesh (S4 §2.3.1, e.g. motion-capture markers): fixed linear
+        combinations of the vertices of the tet that contains them (:func:`barycentric_embedding`), held
+        exactly at their targets by Lagrange multipliers.
 
     Examples
     --------
@@ -96,7 +101,7 @@ class VolumetricEditor:
     >>> result = editor.solve(np.r_[X[fixed], X[moved] + [0, 1, 0]], iterations=10)  # doctest: +SKIP
     """
 
-    def __init__(self, X, T, handles, rigid=(), stiffness=None, rotation="polar", regions=()):
+    def __init__(self, X, T, handles, rigid=(), stiffness=None, rotation="polar", regions=(), points=None):
         if rotation not in ROTATIONS:
             raise ValueError(f"rotation extraction {rotation!r}: one of {ROTATIONS}")
         self.X, self.T, self.rotation = np.asarray(X, dtype=float), np.asarray(T), rotation
@@ -109,12 +114,26 @@ class VolumetricEditor:
         self.G = tet_gradient_operator(self.X, self.T)
         self.D = tet_mass(self.X, self.T, None if stiffness is None else np.asarray(stiffness) ** 2)
         self._volumes = self.D.diagonal()[::3]
-        self._setup_unknowns()
+        self._setup_unknowns(points)
         L = (self.G.T @ self.D @ self.G).tocsr()
         self._L = L
-        self._solver = factorized((self.P.T @ L @ self.P).tocsc(), "MMD_AT_PLUS_A", symmetric=True)
+        self.C = self._point_rows(points)
+        A = (self.P.T @ L @ self.P).tocsc()
+        if self.C is None:
+            self._solver = factorized(A, "MMD_AT_PLUS_A", symmetric=True)
+        else:  # KKT system [[A, (C P)^T], [C P, 0]]: symmetric indefinite
+            CP = (self.C @ self.P).tocsr()
+            self._solver = factorized(sp.bmat([[A, CP.T], [CP, None]]).tocsc())
 
-    def _setup_unknowns(self):
+    def _point_rows(self, points):
+        """``C`` (p, n) sparse: the barycentric rows of the point handles (None without)."""
+        if points is None or len(points) == 0:
+            return None
+        tets, weights = barycentric_embedding(self.X, self.T, np.asarray(points, dtype=float).reshape(-1, 3))
+        rows = np.repeat(np.arange(len(tets)), 4)
+        return sp.csr_matrix((weights.ravel(), (rows, self.T[tets].ravel())), shape=(len(tets), len(self.X)))
+
+    def _setup_unknowns(self, points):
         """``x = P y + b``: free vertices and one centre per rigid region are the unknowns ``y``."""
         n = len(self.X)
         owner = np.full(n, -1)  # -1 free, -2 handle, r >= 0 rigid region r
@@ -126,7 +145,7 @@ class VolumetricEditor:
                 raise ValueError(f"rigid region {r} overlaps a handle or another rigid region")
             owner[verts] = r
             self.region_vertices.append(verts)
-        if len(self.handles) == 0 and not self.rigid:
+        if len(self.handles) == 0 and not self.rigid and points is None:
             raise ValueError("no handle and no rigid region: the position is undetermined")
         free = np.flatnonzero(owner == -1)
         columns = np.full(n, -1)
@@ -146,11 +165,15 @@ class VolumetricEditor:
             b[verts] = rest @ rotations[tets[0]].T
         return b
 
-    def linear_solve(self, targets, rotations):
-        """Positions (n, 3) for the handle ``targets`` (h, 3) and per-tet ``rotations`` (t, 3, 3)."""
+    def linear_solve(self, targets, rotations, point_targets=None):
+        """Positions (n, 3) for the handle ``targets`` (h, 3), per-tet ``rotations`` (t, 3, 3) and the point
+        handles' targets (p, 3)."""
         delta = differential_coordinates(self.G, self.D, rotations.transpose(0, 2, 1))
         b = self._offsets(targets, rotations)
-        y = self._solver.solve(np.asarray(self.P.T @ (delta - self._L @ b)))
+        rhs = np.asarray(self.P.T @ (delta - self._L @ b))
+        if self.C is not None:
+            rhs = np.vstack([rhs, np.asarray(point_targets, dtype=float).reshape(-1, 3) - self.C @ b])
+        y = self._solver.solve(rhs)[:self.P.shape[1]]
         return self.P @ y + b
 
     def transformations(self, X):
@@ -180,13 +203,16 @@ class VolumetricEditor:
             R[tets] = target
         return R
 
-    def solve(self, targets, iterations=10, warm_start=None, region_rotations=None):
+    def solve(self, targets, iterations=10, warm_start=None, region_rotations=None, point_targets=None):
         """Deform towards handle ``targets`` (h, 3): the linear solve, then ``iterations`` S4 iterations.
 
         ``warm_start``: per-tet rotations (t, 3, 3) to start from (e.g. the previous result's, for the next
         frame of an interaction); default the identity. ``region_rotations`` (r, 3, 3): orientations of the
-        region handles; their change from ``warm_start`` is interpolated over the mesh first.
+        region handles; their change from ``warm_start`` is interpolated over the mesh first. ``point_targets``
+        (p, 3): where the point handles go (required with point handles).
         """
+        if (self.C is None) != (point_targets is None):
+            raise ValueError("point_targets are needed exactly when the editor has point handles")
         start = time.perf_counter()
         targets = np.asarray(targets, dtype=float).reshape(-1, 3)
         R = np.broadcast_to(np.eye(3), (len(self.T), 3, 3)).copy() if warm_start is None else warm_start.copy()
@@ -194,7 +220,7 @@ class VolumetricEditor:
             R = self.interpolate_rotations(R, region_rotations)
         shear = []
         for k in range(iterations + 1):
-            X = self.linear_solve(targets, R)
+            X = self.linear_solve(targets, R, point_targets)
             A = self.transformations(X)
             R_new = self.rotations(A)
             shear.append(float(np.average(np.linalg.norm(A - R_new, axis=(1, 2)), weights=self._volumes)))
