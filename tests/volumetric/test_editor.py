@@ -163,3 +163,18 @@ def test_point_handles_inside_the_mesh_reach_their_targets_exactly(bar):
     assert result.shear[-1] < result.shear[0] and np.all(np.linalg.det(editor.transformations(result.X)) > 0)
     with pytest.raises(ValueError, match="point_targets"):
         editor.solve(X[fixed], 1)
+
+
+def test_a_stiffer_middle_deforms_less(bar):
+    """S4 §2.3.2: scaling G_j and g_j of a region makes it stiffer than its surroundings."""
+    X, T, fixed, moved = bar
+    middle = np.abs(X[T].mean(axis=1)[:, 0] - 5.0) < 1.5
+    targets = np.r_[X[fixed], bent(X, moved)]
+
+    def middle_shear(stiffness):
+        editor = VolumetricEditor(X, T, np.r_[fixed, moved], stiffness=stiffness)
+        result = editor.solve(targets, iterations=20)
+        A = editor.transformations(result.X)[middle]
+        return np.linalg.norm(A - result.rotations[middle], axis=(1, 2)).mean()
+
+    assert middle_shear(np.where(middle, 10.0, 1.0)) < 0.5 * middle_shear(None)
