@@ -70,11 +70,13 @@ def demo_artifacts(tmp_path_factory):
     run_stage("skeleton", "--reference", ref, "--out", tmp / "skeleton.h5")
     run_stage("repair_medial", "--reference", ref, "--target", tgt, "--skeleton", tmp / "skeleton.h5",
               "--out", tmp / "repair_medial.h5")
+    run_stage("volumetric_pose", "--mesh", ref, "--script", ROOT / "poses" / "demo-limb-volumetric.yaml",
+              "--out", tmp / "authored", "--artifact", tmp / "volumetric_pose.h5", "--tet-vertices", 300)
     return tmp
 
 
 @pytest.mark.parametrize("stage", ["validate", "keyframes", "classify", "constraints", "fit", "integrate", "verify",
-                                   "downstream", "skeleton", "repair_medial"])
+                                   "downstream", "skeleton", "repair_medial", "volumetric_pose"])
 def test_artifact_attributes_and_documentation(demo_artifacts, stage):
     path = demo_artifacts / ("library.h5" if stage == "validate" else f"{stage}.h5")
     docs = documented_datasets()[stage]
