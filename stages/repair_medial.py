@@ -7,8 +7,6 @@ has too do not count) or ``--max-iters``. See ``posefix.skeletal.repair``.
 
 import posefix  # noqa: F401  (runtime defaults before numpy)
 
-import numpy as np
-
 from posefix.mesh.geometry import bbox_diagonal
 from posefix.pipeline.artifacts import read_artifact, write_artifact
 from posefix.pipeline.cli import library_defaults, run_stage, stage_parser
