@@ -1,10 +1,11 @@
 """Stage volumetric_pose: author a pose library from a reference mesh and a pose script (S4: volumetric editing).
 
-Builds a coarse tet mesh of the reference (decimated surface, tetrahedralized), resolves the script's handle
+Builds a coarse tet mesh of the reference (decimated surface, tetrahedralized), resolves the script's handles
 and rigid regions on it, and poses it with S4's iterative editor for every pose of the script; the surface
-follows the tets (barycentric embedding). Writes the reference and one mesh per pose into one folder, in the
-reference's format, faces and vertex order: a pose library the repair workflow reads. The artifact records
-the tet mesh, its posed vertices, the shear history and seconds per pose.
+follows the tets by S4's smooth transfer (§2.4, Wendland-blended barycentric coordinates). Writes the
+reference and one mesh per pose into one folder, in the reference's format, faces and vertex order: a pose
+library the repair workflow reads. The artifact records the tet mesh, its posed vertices, the shear history
+and seconds per pose.
 """
 
 from pathlib import Path

@@ -1,4 +1,4 @@
-"""Pose authoring with S4's editor: region handles moved per pose, the surface carried by the tet mesh.
+"""Pose authoring with S4's editor: handles moved per pose, the surface carried by S4's smooth transfer (§2.4).
 
 A handle is a region of tets (all vertices handles, its orientation imposed, S4 §2.3.1); a move turns it
 about its rest centroid and translates it. Large turns are reached in ``frames`` steps, each warm-started
@@ -13,7 +13,8 @@ import numpy as np
 
 from posefix.mesh.rotations import rotation_exp
 from posefix.volumetric.editor import EditResult, VolumetricEditor
-from posefix.volumetric.embedding import barycentric_embedding, embedded_points
+from posefix.mesh.geometry import bbox_diagonal
+from posefix.volumetric.transfer import transfer_matrix
 
 log = logging.getLogger(__name__)
 
@@ -48,9 +49,12 @@ class VolumetricPoser:
         Rigid regions as tet ids.
     points : dict of str -> (p, 3) float, optional
         Point handles (rest positions inside or near the tets), a group per name.
+    radius : float, optional
+        Support of the transfer (:func:`~posefix.volumetric.transfer.transfer_matrix`, model units);
+        default 5 % of the surface's bbox diagonal (S4).
     """
 
-    def __init__(self, V, X, T, handles, rigid=None, points=None):
+    def __init__(self, V, X, T, handles, rigid=None, points=None, radius=None):
         self.V, self.X, self.T = V, X, T
         self.names = list(handles)
         self.regions = [np.asarray(handles[n]) for n in self.names]
@@ -61,7 +65,7 @@ class VolumetricPoser:
             raise ValueError("handle regions share vertices")
         self.editor = VolumetricEditor(X, T, vertices, rigid=list((rigid or {}).values()), regions=self.regions,
                                        points=np.concatenate(list(self.points.values())) if self.points else None)
-        self.embedding = barycentric_embedding(X, T, V)
+        self.transfer = transfer_matrix(X, T, V, 0.05 * bbox_diagonal(V) if radius is None else radius)
 
     def targets(self, moves, fraction=1.0):
         """Targets of the region handles' vertices (h, 3), their rotations (r, 3, 3) and the point handles'
@@ -88,7 +92,7 @@ class VolumetricPoser:
             edit = self.editor.solve(targets, iterations, warm_start=rotations, region_rotations=region_rotations,
                                      point_targets=point_targets)
             rotations = edit.rotations
-        positions = embedded_points(edit.X, self.T, *self.embedding)
+        positions = self.transfer @ edit.X
         seconds = time.perf_counter() - start
         log.debug("posed in %d frames of %d iterations: shear %.3g, %.2f s", frames, iterations, edit.shear[-1],
                   seconds)

@@ -1,6 +1,7 @@
-"""Surface points carried by a tet mesh: barycentric coordinates in the tet that contains them (or the nearest).
+"""Points in a tet mesh: barycentric coordinates in the tet that contains them (or the nearest).
 
-Until S4's smooth high-resolution transfer (§2.4), the surface follows the coarse tet mesh linearly.
+S4's point handles (markers) are such fixed combinations of tet vertices; the smooth surface transfer
+(:mod:`posefix.volumetric.transfer`) falls back to them where no boundary face is near.
 """
 
 import numpy as np
