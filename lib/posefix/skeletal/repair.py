@@ -20,10 +20,10 @@ reference's skeletal mesh ``(S, R)`` and the target itself:
 5. **Flow.** S1's medial-ball flow (:class:`~posefix.skeletal.flow.MedialBallFlow`) from that start, with
    ``S_d`` as anchors, until no new intersection remains or ``max_iters``.
 
-Measured on the demo library (bends of 120-150 degrees): S1's flow started from the target itself *adds*
-intersections (129 -> 687 new faces on demo-01) because folded parts are pushed out of the nearest balls,
-which belong to the other part; the rebuild leaves none on any demo pose, the flow is only needed where
-the rebuilt start still intersects.
+Measured on the demo library (bends of 120-150 degrees): S1's flow started from the target itself, with the
+balls carried by the target's frames, *adds* intersections (demo-01: 129 -> 536 new intersecting faces in
+50 iterations) because folded parts are pushed out of the nearest balls, which belong to the other part;
+the rebuild leaves none on any demo pose, the flow is only needed where the rebuilt start still intersects.
 """
 
 import logging
