@@ -48,21 +48,39 @@ def transfer_matrix(X, T, V, radius):
     scipy.sparse.csr_matrix
     """
     faces, owner = boundary_faces(T)
-    near = cKDTree(X[faces].mean(axis=1)).query_ball_point(V, radius, return_sorted=False)
+    centres = X[faces].mean(axis=1)
+    near = cKDTree(centres).query_ball_point(V, radius, return_sorted=False)
     counts = np.fromiter(map(len, near), dtype=np.int64, count=len(V))
-    rows = np.repeat(np.arange(len(V)), counts)
     pairs = np.concatenate([np.asarray(n, dtype=np.int64) for n in near]) if counts.any() else np.zeros(0, np.int64)
-    tets = owner[pairs]
-    weight = wendland(np.linalg.norm(V[rows] - X[faces[pairs]].mean(axis=1), axis=1), radius)
-    keep = weight > 0
-    rows, tets, weight = rows[keep], tets[keep], weight[keep]
-    local = np.einsum("kij,kj->ki", np.linalg.inv(edge_matrices(X, T))[tets], V[rows] - X[T[tets, 0]])
-    coords = np.column_stack([1.0 - local.sum(axis=1), local])
+    rows = np.repeat(np.arange(len(V)), counts)  # (vertex, boundary face) pairs, grouped by vertex
+    weight = wendland(np.linalg.norm(V[rows] - centres[pairs], axis=1), radius)
     total = np.bincount(rows, weights=weight, minlength=len(V))
+    values = _blended_coordinates(X, T, V, rows, owner[pairs], weight / np.where(total > 0, total, 1.0)[rows])
+    # W (n, 4t): column 4 j + c holds the weighted coordinate of corner c of tet j (repeats summed by the
+    # product); S (4t, k) sends it to that corner's vertex. B = W S is a sparse product, no sort of the
+    # (vertex, corner) entries.
+    indptr = np.concatenate([[0], np.cumsum(4 * counts)])
+    W = sp.csr_matrix((values.ravel(), (4 * owner[pairs][:, None] + np.arange(4)).ravel(), indptr),
+                      shape=(len(V), 4 * len(T)))
+    S = sp.csr_matrix((np.ones(T.size), T.ravel(), np.arange(T.size + 1)), shape=(T.size, len(X)))
+    B = W @ S
     lonely = np.flatnonzero(total == 0)
-    values = (weight / total[rows])[:, None] * coords
-    B = sp.csr_matrix((values.ravel(), (np.repeat(rows, 4), T[tets].ravel())), shape=(len(V), len(X)))
     if len(lonely):
         tet, bary = barycentric_embedding(X, T, V[lonely])
         B = B + sp.csr_matrix((bary.ravel(), (np.repeat(lonely, 4), T[tet].ravel())), shape=B.shape)
-    return B.tocsr()
+    B = B.tocsr()
+    B.sort_indices()
+    return B
+
+
+def _blended_coordinates(X, T, V, rows, tets, weight, chunk=1 << 20):
+    """``weight[:, None] *`` the barycentric coordinates of ``V[rows]`` in ``T[tets]``, (p, 4), in chunks."""
+    inverse = np.linalg.inv(edge_matrices(X, T))
+    out = np.empty((len(rows), 4))
+    for s in range(0, len(rows), chunk):
+        r, t = rows[s:s + chunk], tets[s:s + chunk]
+        local = np.einsum("kij,kj->ki", inverse[t], V[r] - X[T[t, 0]])
+        out[s:s + chunk, 0] = 1.0 - local.sum(axis=1)
+        out[s:s + chunk, 1:] = local
+        out[s:s + chunk] *= weight[s:s + chunk, None]
+    return out
