@@ -1,8 +1,11 @@
 # Baseline repairs beside S0, compared in the report (config `baselines`). medial: the reference's
 # skeletal mesh once (S1 §2, settings of skeletal_pose), then per pose the medial repair (S1 §4 flow from
-# the target, posefix.skeletal.repair) and the repaired mesh in the target's format.
+# the target, posefix.skeletal.repair). volumetric: the reference's tet mesh once (S4 §2.1), then per pose
+# the volumetric fill of the free region (S4's editor, posefix.volumetric.fill). Every baseline's repaired
+# mesh is exported in the target's format.
 
 MEDIAL = config["repair_medial"]
+FILL = config["repair_volumetric"]
 
 
 rule skeleton:
@@ -48,22 +51,66 @@ rule repair_medial:
         " --skeleton {input.skeleton:q} --out {output:q} {params.options} --threads {threads} --log {log:q}"
 
 
-rule export_medial:
+rule tet_mesh:
     input:
-        medial=rules.repair_medial.output[0],
+        reference=LIBRARY.reference.path,
+        library=rules.validate.output[0],
+    output:
+        f"{RESULTS}/tets.h5",
+    params:
+        python=PYTHON,
+        script=stage_script("tet_mesh"),
+    threads: 1
+    log:
+        f"{RESULTS}/logs/tet_mesh.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/tet_mesh.tsv"
+    shell:
+        "{params.python:q} {params.script:q} --reference {input.reference:q} --out {output:q}"
+        " --tet-vertices {FILL[tet_vertices]} --threads {threads} --log {log:q}"
+
+
+rule repair_volumetric:
+    input:
+        reference=LIBRARY.reference.path,
+        target=pose_file,
+        classify=f"{RESULTS}/{{pose}}/classify.h5",
+        tets=rules.tet_mesh.output[0],
+    output:
+        f"{RESULTS}/{{pose}}/volumetric.h5",
+    params:
+        options=" ".join(f"--{key.replace('_', '-')} {FILL[key]}" for key in
+                         ("iterations", "point_weight", "max_rings", "max_free")),
+        python=PYTHON,
+        script=stage_script("repair_volumetric"),
+    threads: FILL["threads"]
+    log:
+        f"{RESULTS}/logs/{{pose}}/repair_volumetric.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/{{pose}}/repair_volumetric.tsv"
+    shell:
+        "{params.python:q} {params.script:q} --reference {input.reference:q} --target {input.target:q}"
+        " --classify {input.classify:q} --tets {input.tets:q} --out {output:q} {params.options}"
+        " --threads {threads} --log {log:q}"
+
+
+rule export_baseline:
+    input:
+        artifact=f"{RESULTS}/{{pose}}/{{baseline}}.h5",
         target=pose_file,
     output:
-        f"{RESULTS}/repaired-medial/{{pose}}{{suffix}}",
+        f"{RESULTS}/repaired-{{baseline}}/{{pose}}{{suffix}}",
     wildcard_constraints:
+        baseline="|".join(BASELINE_CHOICES),
         suffix=r"\.(obj|ply|off)(\.gz)?",
     params:
         python=PYTHON,
         script=stage_script("export"),
     threads: 1
     log:
-        f"{RESULTS}/logs/{{pose}}/export_medial{{suffix}}.log",
+        f"{RESULTS}/logs/{{pose}}/export_{{baseline}}{{suffix}}.log",
     benchmark:
-        f"{RESULTS}/benchmarks/{{pose}}/export_medial{{suffix}}.tsv"
+        f"{RESULTS}/benchmarks/{{pose}}/export_{{baseline}}{{suffix}}.tsv"
     shell:
-        "{params.python:q} {params.script:q} --artifact {input.medial:q} --stage repair_medial"
+        "{params.python:q} {params.script:q} --artifact {input.artifact:q} --stage repair_{wildcards.baseline}"
         " --target {input.target:q} --out {output:q} --log {log:q}"

@@ -33,7 +33,7 @@ def _typed(value):
 
 
 for _section in ("demo", "keyframes", "classify", "constraints", "fit", "integrate", "verify", "downstream",
-                 "skeletal_pose", "repair_medial", "volumetric_pose"):
+                 "skeletal_pose", "repair_medial", "repair_volumetric", "volumetric_pose", "volumetric_animate"):
     if isinstance(config.get(_section), dict):
         config[_section] = _typed(config[_section])
 if isinstance(config.get("baselines"), str):  # --config baselines=medial, baselines=[] or baselines=a,b
@@ -89,6 +89,7 @@ RESULTS = f"{config['results']}/{LIBRARY.name}"
 REPORTS = f"{config['reports']}/{LIBRARY.name}"
 IS_DEMO = config["library"] is None
 BASELINES = config["baselines"]  # repairs beside S0, compared in the report
+BASELINE_CHOICES = ("medial", "volumetric")  # stage repair_<name> writes results/<library>/<pose>/<name>.h5
 
 
 def baseline_artifacts(pose):

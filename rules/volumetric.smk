@@ -1,6 +1,7 @@
-# S4 pose authoring: a reference mesh and a pose script -> a pose library (stages/volumetric_pose.py). Not part
-# of `rule all`: run `snakemake author_volumetric`, then repair the result with
-# `snakemake --config library=<volumetric_pose.out>/<script name>`.
+# S4 pose authoring: a reference mesh and a pose script -> a pose library (stages/volumetric_pose.py), or
+# marker tracks -> an animated pose library (stages/volumetric_animate.py). Not part of `rule all`: run
+# `snakemake author_volumetric` or `snakemake animate_volumetric`, then repair the result with
+# `snakemake --config library=<out>/<script or tracks name>`.
 
 VOLUMETRIC = config["volumetric_pose"]
 VOLUMETRIC_SCRIPT = VOLUMETRIC["script"] or str(Path(workflow.basedir) / "poses" / "demo-limb-volumetric.yaml")
@@ -29,3 +30,36 @@ rule author_volumetric:
     shell:
         "{params.python:q} {params.script:q} --mesh {input.mesh:q} --script {input.script:q} --out {output.library:q}"
         " --artifact {output.artifact:q} --name {params.name:q} {params.options} --threads {threads} --log {log:q}"
+
+
+ANIMATE = config["volumetric_animate"]
+ANIMATE_TRACKS = ANIMATE["tracks"] or str(Path(workflow.basedir) / "poses" / "demo-limb-markers.csv")
+ANIMATE_MESH = ANIMATE["mesh"] or f"{config['demo']['folder']}/{demo.REFERENCE_NAME}{demo.REFERENCE_SUFFIX}"
+ANIMATE_NAME = Path(ANIMATE_TRACKS).name.split(".")[0]
+ANIMATED = f"{config['results']}/authored/{ANIMATE_NAME}"
+
+
+rule animate_volumetric:
+    input:
+        mesh=ANIMATE_MESH,
+        tracks=ANIMATE_TRACKS,
+    output:
+        library=directory(f"{ANIMATE['out']}/{ANIMATE_NAME}"),
+        artifact=f"{ANIMATED}/volumetric_animate.h5",
+    params:
+        name=ANIMATE_NAME,
+        options=" ".join(f"--{key.replace('_', '-')} {ANIMATE[key]}" for key in
+                         ("attach", "max_offset", "tet_vertices", "iterations", "first_iterations")),
+        rigid=" ".join(f"--rigid {shlex.quote(name + '=' + ','.join(str(float(v)) for c in box for v in c))}"
+                       for name, box in ANIMATE["rigid"].items()),
+        python=PYTHON,
+        script=stage_script("volumetric_animate"),
+    threads: ANIMATE["threads"]
+    log:
+        f"{ANIMATED}/volumetric_animate.log",
+    benchmark:
+        f"{ANIMATED}/volumetric_animate.tsv"
+    shell:
+        "{params.python:q} {params.script:q} --mesh {input.mesh:q} --tracks {input.tracks:q} --out {output.library:q}"
+        " --artifact {output.artifact:q} --name {params.name:q} {params.options} {params.rigid}"
+        " --threads {threads} --log {log:q}"

@@ -18,7 +18,7 @@ from posefix.pipeline.timings import Timings
 def build_parser():
     parser = stage_parser("export", __doc__)
     parser.add_argument("--artifact", required=True, help="verify.h5 (S0) or a baseline's artifact of the pose")
-    parser.add_argument("--stage", default="verify", choices=("verify", "repair_medial"),
+    parser.add_argument("--stage", default="verify", choices=("verify", "repair_medial", "repair_volumetric"),
                         help="the stage that wrote --artifact: its dataset 'repaired' is written")
     parser.add_argument("--target", required=True, help="the target mesh file (its format is reproduced)")
     parser.add_argument("--out", required=True, help="repaired mesh file (same extension as --target)")

@@ -14,7 +14,7 @@ from posefix.pipeline.artifacts import config_hash, inputs_hash
 
 STAGES = ["demo", "validate", "keyframes", "classify", "constraints", "fit", "integrate", "verify", "export",
           "downstream", "summary", "render", "overview", "skeletal_pose", "skeleton", "repair_medial",
-          "volumetric_pose"]
+          "volumetric_pose", "tet_mesh", "repair_volumetric", "volumetric_animate"]
 
 
 def documented_datasets():
@@ -72,11 +72,17 @@ def demo_artifacts(tmp_path_factory):
               "--out", tmp / "repair_medial.h5")
     run_stage("volumetric_pose", "--mesh", ref, "--script", ROOT / "poses" / "demo-limb-volumetric.yaml",
               "--out", tmp / "authored", "--artifact", tmp / "volumetric_pose.h5", "--tet-vertices", 300)
+    run_stage("volumetric_animate", "--mesh", ref, "--tracks", ROOT / "poses" / "demo-limb-markers.csv",
+              "--out", tmp / "animated", "--artifact", tmp / "volumetric_animate.h5", "--tet-vertices", 300)
+    run_stage("tet_mesh", "--reference", ref, "--out", tmp / "tet_mesh.h5", "--tet-vertices", 300)
+    run_stage("repair_volumetric", "--reference", ref, "--target", tgt, "--classify", tmp / "classify.h5",
+              "--tets", tmp / "tet_mesh.h5", "--out", tmp / "repair_volumetric.h5", "--max-rings", 2)
     return tmp
 
 
 @pytest.mark.parametrize("stage", ["validate", "keyframes", "classify", "constraints", "fit", "integrate", "verify",
-                                   "downstream", "skeleton", "repair_medial", "volumetric_pose"])
+                                   "downstream", "skeleton", "repair_medial", "volumetric_pose",
+                                   "tet_mesh", "repair_volumetric", "volumetric_animate"])
 def test_artifact_attributes_and_documentation(demo_artifacts, stage):
     path = demo_artifacts / ("library.h5" if stage == "validate" else f"{stage}.h5")
     docs = documented_datasets()[stage]

@@ -73,13 +73,14 @@ def test_demo_poses_are_repaired(demo_run):
         V, F2 = read_mesh(demo_run / "results" / "demo" / "repaired" / f"{pose.name}{pose.suffix}")
         assert np.array_equal(F, F2) and V.shape == V_tgt.shape
     markdown = (demo_run / "reports" / "demo" / "summary.md").read_text()
-    # the repair table, the downstream table and S0 vs the medial repair (config baselines: [medial])
+    # the repair table, the downstream table and S0 vs the baseline repairs (config baselines: [medial, volumetric])
     assert markdown.count("| demo-") == 3 * len(POSES) and "## S0 vs the baseline repairs" in markdown
 
 
-def test_the_report_compares_s0_with_the_medial_repair(demo_run):
-    """summary.json's baselines.medial: the medial artifact's numbers and its deviation over S0's V_C,
-    measured as S0's; renders.png has a third panel."""
+@pytest.mark.parametrize("name", ["medial", "volumetric"])
+def test_the_report_compares_s0_with_the_baseline_repairs(demo_run, name):
+    """summary.json's baselines.<name>: the artifact's numbers and its deviation over S0's V_C, measured as
+    S0's; renders.png has a panel per baseline."""
     import json
     from matplotlib.image import imread
     from posefix.pipeline.timings import benchmark_seconds
@@ -87,41 +88,46 @@ def test_the_report_compares_s0_with_the_medial_repair(demo_run):
     summary = json.loads((demo_run / "reports" / "demo" / "summary.json").read_text())
     for e in summary["poses"]:
         folder = demo_run / "results" / "demo" / e["pose"]
-        medial = e["baselines"]["medial"]
-        with h5py.File(folder / "medial.h5", "r") as fh, h5py.File(folder / "classify.h5", "r") as cl, \
+        baseline = e["baselines"][name]
+        with h5py.File(folder / f"{name}.h5", "r") as fh, h5py.File(folder / "classify.h5", "r") as cl, \
                 h5py.File(folder / "keyframes.h5", "r") as kf:
             metrics = fh["metrics"].attrs
-            assert medial["intersecting_faces"] == {"repaired": metrics["intersecting_faces_repaired"],
-                                                    "repaired_new": metrics["intersecting_faces_repaired_new"]}
-            assert medial["iterations"] == metrics["iterations"]
+            assert baseline["intersecting_faces"] == {"repaired": metrics["intersecting_faces_repaired"],
+                                                      "repaired_new": metrics["intersecting_faces_repaired_new"]}
+            assert baseline["iterations"] == metrics["iterations"]
             # wall seconds of the stage, as S0's (the artifact's in-process seconds are less)
-            wall = benchmark_seconds(demo_run / "results" / "demo" / "benchmarks" / e["pose"], "repair_medial")
-            assert medial["seconds"] == wall >= metrics["seconds"]
+            wall = benchmark_seconds(demo_run / "results" / "demo" / "benchmarks" / e["pose"], f"repair_{name}")
+            assert baseline["seconds"] == wall >= metrics["seconds"]
             assert np.array_equal(fh["start"][()], kf["target"][()])  # measured from the same target as S0
             _, dev = deviation(fh["repaired"][()], kf["target"][()], cl["mask"][()],
                                kf["metrics"].attrs["bbox_diagonal"])
-        assert medial["deviation"] == pytest.approx(dev) and "downstream" not in medial  # downstream.baselines: false
+            if name == "volumetric":  # V_C kept exactly, the free region filled
+                free = fh["free"][()]
+                assert np.array_equal(fh["repaired"][()][~free], kf["target"][()][~free])
+                assert free[~cl["mask"][()]].all()
+        assert baseline["deviation"] == pytest.approx(dev) and "downstream" not in baseline  # downstream.baselines
         figures = demo_run / "reports" / "demo" / "figures" / e["pose"]
         renders, deviation_map = imread(figures / "renders.png"), imread(figures / "deviation.png")
-        assert renders.shape[1] == 1.5 * deviation_map.shape[1]  # three panels of 5 inches, two of 5
+        assert renders.shape[1] == 2 * deviation_map.shape[1]  # four panels of 5 inches, two of 5
     page = (demo_run / "reports" / "demo" / "summary.html").read_text()
-    assert "<th>new faces S0 / medial</th>" in page
+    assert "<th>new faces S0 / medial / volumetric</th>" in page
 
 
 def test_baselines_reach_the_report_and_the_check(tmp_path):
-    """config baselines adds the medial artifact to summary and render, downstream.baselines to the check;
-    baselines=[] leaves it out everywhere."""
+    """config baselines adds the baseline artifacts to summary and render, downstream.baselines to the check;
+    baselines=[] leaves them out everywhere."""
     proc = snakemake(tmp_path, "-n", "-p", "--config", "poses=demo-01", "downstream={'baselines': True}")
     assert proc.returncode == 0, proc.stderr[-2000:]
     commands = [line for line in (proc.stdout + proc.stderr).splitlines() if "stages/" in line]
-    medial = "--baseline medial=results/demo/demo-01/medial.h5"
-    for stage in ("render", "downstream"):
-        assert sum(f"stages/{stage}.py" in c and medial in c for c in commands) == 1, stage
-    assert any("stages/summary.py" in c and "--baselines medial" in c for c in commands)
+    for name in ("medial", "volumetric"):
+        option = f"--baseline {name}=results/demo/demo-01/{name}.h5"
+        for stage in ("render", "downstream"):
+            assert sum(f"stages/{stage}.py" in c and option in c for c in commands) == 1, (stage, name)
+    assert any("stages/summary.py" in c and "--baselines medial,volumetric" in c for c in commands)
     proc = snakemake(tmp_path, "-n", "-p", "--config", "poses=demo-01", "baselines=[]")
     assert proc.returncode == 0, proc.stderr[-2000:]
     commands = [line for line in (proc.stdout + proc.stderr).splitlines() if "stages/" in line]
-    assert len(commands) > 10 and not any("--baseline" in c or "medial" in c for c in commands)
+    assert len(commands) > 10 and not any("--baseline" in c or "medial" in c or "volumetric" in c for c in commands)
 
 
 def test_report_has_every_section_and_non_blank_figures(demo_run):
@@ -289,7 +295,7 @@ def test_author_a_library_from_the_demo_rig_and_repair_it(tmp_path):
 
 def test_author_a_library_from_the_demo_pose_script_and_repair_it(tmp_path):
     """`snakemake author_volumetric` (S4: the demo pose script -> vol-bend, vol-fold, vol-twist), then the S0
-    repair of the folded one, with the medial repair beside it."""
+    repair of the folded one, with the baseline repairs beside it."""
     import json
     proc = snakemake(tmp_path, "author_volumetric", "--config", "volumetric_pose={'tet_vertices': 400}")
     assert proc.returncode == 0, proc.stderr[-3000:]

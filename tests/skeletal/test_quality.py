@@ -4,7 +4,8 @@ import numpy as np
 
 from conftest import icosphere
 from posefix.mesh.geometry import point_triangle_distance
-from posefix.skeletal.quality import bad_centres, surface_distance_below
+from posefix.mesh.distance import surface_distance_below
+from posefix.skeletal.quality import bad_centres
 
 
 def test_the_true_centre_of_a_sphere_is_good_outside_and_too_large_balls_are_bad():

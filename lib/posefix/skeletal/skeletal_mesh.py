@@ -28,7 +28,8 @@ from posefix.mesh.laplacian import uniform_laplacian
 from posefix.mesh.topology import vertex_adjacency
 from posefix.mesh.winding import winding_numbers
 from posefix.skeletal.poles import inner_poles
-from posefix.skeletal.quality import bad_centres, surface_distance_below
+from posefix.mesh.distance import surface_distance_below
+from posefix.skeletal.quality import bad_centres
 from posefix.skeletal.shrinking_ball import shrinking_ball_centers
 
 log = logging.getLogger(__name__)

@@ -93,7 +93,11 @@ class VolumetricEditor:
     points : (p, 3) float, optional
         Point handles anywhere inside or near the mesh (S4 §2.3.1, e.g. motion-capture markers): fixed linear
         combinations of the vertices of the tet that contains them (:func:`barycentric_embedding`), held
-        exactly at their targets by Lagrange multipliers.
+        exactly at their targets by Lagrange multipliers, or in the least-squares sense with ``point_weight``.
+    point_weight : float, optional
+        Soft point handles: ``point_weight`` times the mean diagonal of ``L`` weighs ``|C x - p|^2`` against the
+        Laplacian energy. Needed when the points over-determine the tets (more points than a tet has
+        degrees of freedom, e.g. a whole surface region); default exact (Lagrange multipliers).
 
     Examples
     --------
@@ -101,7 +105,8 @@ class VolumetricEditor:
     >>> result = editor.solve(np.r_[X[fixed], X[moved] + [0, 1, 0]], iterations=10)  # doctest: +SKIP
     """
 
-    def __init__(self, X, T, handles, rigid=(), stiffness=None, rotation="polar", regions=(), points=None):
+    def __init__(self, X, T, handles, rigid=(), stiffness=None, rotation="polar", regions=(), points=None,
+                 point_weight=None):
         if rotation not in ROTATIONS:
             raise ValueError(f"rotation extraction {rotation!r}: one of {ROTATIONS}")
         self.X, self.T, self.rotation = np.asarray(X, dtype=float), np.asarray(T), rotation
@@ -118,8 +123,11 @@ class VolumetricEditor:
         L = (self.G.T @ self.D @ self.G).tocsr()
         self._L = L
         self.C = self._point_rows(points)
+        self.point_weight = None if point_weight is None else point_weight * L.diagonal().mean()
+        if self.C is not None and self.point_weight is not None:
+            L = L + self.point_weight * (self.C.T @ self.C)
         A = (self.P.T @ L @ self.P).tocsc()
-        if self.C is None:
+        if self.C is None or self.point_weight is not None:
             self._solver = factorized(A, "MMD_AT_PLUS_A", symmetric=True)
         else:  # KKT system [[A, (C P)^T], [C P, 0]]: symmetric indefinite
             CP = (self.C @ self.P).tocsr()
@@ -170,9 +178,15 @@ class VolumetricEditor:
         handles' targets (p, 3)."""
         delta = differential_coordinates(self.G, self.D, rotations.transpose(0, 2, 1))
         b = self._offsets(targets, rotations)
-        rhs = np.asarray(self.P.T @ (delta - self._L @ b))
+        rhs = delta - self._L @ b
         if self.C is not None:
-            rhs = np.vstack([rhs, np.asarray(point_targets, dtype=float).reshape(-1, 3) - self.C @ b])
+            p = np.asarray(point_targets, dtype=float).reshape(-1, 3)
+            if self.point_weight is None:
+                rhs = np.vstack([np.asarray(self.P.T @ rhs), p - self.C @ b])
+            else:
+                rhs = np.asarray(self.P.T @ (rhs + self.point_weight * (self.C.T @ (p - self.C @ b))))
+        else:
+            rhs = np.asarray(self.P.T @ rhs)
         y = self._solver.solve(rhs)[:self.P.shape[1]]
         return self.P @ y + b
 

@@ -1,0 +1,47 @@
+"""Stage tet_mesh: the coarse tet mesh of the reference (S4 §2.1), once per library.
+
+Quadric decimation, then a Delaunay tetrahedralization kept inside the reference by its winding number
+(``posefix.volumetric.tet_mesh``). The volumetric fill (stage repair_volumetric) poses these tets in every
+target pose.
+"""
+
+import posefix  # noqa: F401  (runtime defaults before numpy)
+
+from posefix.pipeline.artifacts import write_artifact
+from posefix.pipeline.cli import library_defaults, run_stage, stage_parser
+from posefix.pipeline.errors import InputError
+from posefix.pipeline.library import read_reference
+from posefix.pipeline.timings import Timings
+from posefix.volumetric.tet_mesh import tet_mesh
+
+DOCS = {
+    "X": ("length", "tet-mesh vertices at rest, (k, 3) float64"),
+    "T": ("index", "tets (positively oriented, one connected set), (t, 4) int64"),
+}
+
+
+def build_parser():
+    parser = stage_parser("tet_mesh", __doc__)
+    parser.add_argument("--reference", required=True, help="reference mesh (.obj/.ply/.off, optionally .gz)")
+    parser.add_argument("--out", required=True, help="tets.h5 to write")
+    parser.add_argument("--tet-vertices", type=int, default=library_defaults(tet_mesh)["surface_vertices"],
+                        help="surface vertices of the decimated mesh the tets are built from")
+    return parser
+
+
+def main(args, log):
+    timings = Timings()
+    if args.tet_vertices < 4:
+        raise InputError("arguments", "need --tet-vertices >= 4")
+    with timings.step("read"):
+        V, F = read_reference(args.reference)
+    with timings.step("tets"):
+        X, T = tet_mesh(V, F, args.tet_vertices)
+    log.info("%s: %d vertices; tet mesh of %d vertices, %d tets", args.reference, len(V), len(X), len(T))
+    params = {k: v for k, v in vars(args).items() if k not in ("log", "out", "threads")}
+    write_artifact(args.out, "tet_mesh", {"X": X, "T": T}, params=params, inputs=[args.reference],
+                   timings=timings, metrics={"tet_vertices": len(X), "tets": len(T)}, docs=DOCS)
+
+
+if __name__ == "__main__":
+    run_stage(build_parser(), main)
