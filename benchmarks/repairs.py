@@ -1,8 +1,9 @@
 """Repairs compared (`make bench`, or alone: `.venv/bin/python benchmarks/repairs.py`): reports/bench/repairs.md.
 
-S0's space-time repair and the medial repair (S1's balls and flow, config ``baselines: [medial]``) on every
-pose of lion, cat and horse (../shared/data) and the demo library: the pipeline runs with the downstream
-check towards both repaired poses (``downstream.baselines: true``; Snakemake reuses what is up to date), then
+S0's space-time repair and the baseline repairs (config ``baselines: [medial, volumetric]``: S1's balls and
+flow, S4's volumetric fill) on every pose of lion, cat and horse (../shared/data) and the demo library: the
+pipeline runs with the downstream check towards every repaired pose (``downstream.baselines: true``;
+Snakemake reuses what is up to date), then
 one table from each library's summary.json: poses with no new intersecting face outside S0's pass-through
 regions, deviation from the target over V_C and over the free vertices (relative to the bbox diagonal),
 Gauss-Newton runs converged and their iterations, seconds per pose.
@@ -47,18 +48,26 @@ def gauss_newton(downstream, example):
     return converged, sum(len(r["converged"]) for r in runs), sum(sum(r["iterations"]) for r in runs)
 
 
+BASELINES = ("medial", "volumetric")
+LIBRARY_STAGES = {"medial": "skeleton", "volumetric": "tet_mesh"}
+"""The once-per-library stage of each baseline (its seconds are reported apart)."""
+
+
 def method_rows(entries):
-    """Per method (S0, medial): the figures of one library over its poses (dict of dicts)."""
+    """Per method (S0, then each baseline): the figures of one library over its poses (dict of dicts)."""
     s0 = [{"clean": e["intersecting_faces"]["repaired_new"] == e["intersecting_faces"]["repaired_new_in_fallback"],
            "new": e["intersecting_faces"]["repaired_new"], "deviation": e["deviation"], "seconds": repair_seconds(e),
            "gn": gauss_newton(e["downstream"], "repaired"), "gn_target": gauss_newton(e["downstream"], "original")}
           for e in entries]
-    medial = [{"clean": b["intersecting_faces"]["repaired_new"] == 0, "new": b["intersecting_faces"]["repaired_new"],
-               "deviation": b["deviation"], "seconds": b["seconds"],
-               "gn": gauss_newton(b["downstream"], "medial") if "downstream" in b else None}
-              for b in (e["baselines"]["medial"] for e in entries)]
-    return {"S0": _aggregate(s0), "medial": _aggregate(medial),
-            "target": {"gn": np.sum([r["gn_target"] for r in s0], axis=0).tolist()}}
+    rows = {"S0": _aggregate(s0)}
+    for name in BASELINES:
+        rows[name] = _aggregate([{"clean": b["intersecting_faces"]["repaired_new"] == 0,
+                                  "new": b["intersecting_faces"]["repaired_new"], "deviation": b["deviation"],
+                                  "seconds": b["seconds"],
+                                  "gn": gauss_newton(b["downstream"], name) if "downstream" in b else None}
+                                 for b in (e["baselines"][name] for e in entries)])
+    rows["target"] = {"gn": np.sum([r["gn_target"] for r in s0], axis=0).tolist()}
+    return rows
 
 
 def _aggregate(rows):
@@ -74,14 +83,14 @@ def _aggregate(rows):
 
 def markdown(result):
     """The section 'Repairs compared' of BENCHMARKS.md (list of str)."""
-    lines = ["## Repairs compared: S0 vs the medial repair (S1)", "",
-             "Every pose of each library, both repairs from the same target (`benchmarks/repairs.py`, which also "
+    lines = ["## Repairs compared: S0 vs the medial repair (S1) and the volumetric fill (S4)", "",
+             "Every pose of each library, the three repairs from the same target (`benchmarks/repairs.py`, which also "
              "runs alone). Per pose: `summary-<library>.md`, section 'S0 vs the baseline repairs'.", "",
              "| library | repair | poses | 0 new faces (S0: outside pass-through) | new faces (all poses) | "
              "V_C deviation mean (mean over poses) | V_C max | free max | GN converged / runs | GN iterations "
              "(all runs) | seconds per pose |", "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
     for name, r in result["libraries"].items():
-        for method in ("S0", "medial"):
+        for method in ("S0", *BASELINES):
             m = r[method]
             gn = f"{m['gn'][0]} / {m['gn'][1]} | {m['gn'][2]}" if m["gn"] else "- | -"
             lines.append(f"| {name} | {method} | {m['poses']} | {m['clean']} | {m['new_faces']} | {m['vc_mean']:.1e} | "
@@ -91,8 +100,10 @@ def markdown(result):
     lines += ["", "Deviations are from the target, relative to the reference's bbox diagonal, over S0's V_C (classify) "
                   "and the other (free) vertices. GN: the downstream Gauss-Newton check (S0 §5) over config "
                   "downstream's grid towards each pose. Seconds: wall seconds of the stages per pose (S0: keyframes "
-                  "to verify; medial: repair_medial), without the medial's skeleton, once per library: "
-              + ", ".join(f"{n} {r['skeleton_seconds']:.1f} s" for n, r in result["libraries"].items()) + ".", ""]
+                  "to verify; medial: repair_medial; volumetric: repair_volumetric), without the stages each baseline "
+                  "runs once per library (medial: skeleton; volumetric: tet_mesh): "
+              + ", ".join(f"{n} {r['library_seconds']['skeleton']:.1f} s and {r['library_seconds']['tet_mesh']:.1f} s"
+                          for n, r in result["libraries"].items()) + ".", ""]
     return lines
 
 
@@ -109,7 +120,8 @@ def main():
     for lib in libraries:
         name = lib.name if lib else "demo"
         rows = method_rows(run_library(lib, args.cores, out))
-        rows["skeleton_seconds"] = benchmark_seconds(ROOT / "results" / name / "benchmarks", "skeleton") or 0.0
+        rows["library_seconds"] = {stage: benchmark_seconds(ROOT / "results" / name / "benchmarks", stage) or 0.0
+                                   for stage in LIBRARY_STAGES.values()}
         result["libraries"][name] = rows
     result["seconds"] = time.perf_counter() - start
     (out / "repairs.md").write_text("\n".join(markdown(result)))

@@ -6,9 +6,10 @@ absent, which the report says). Pieces: the self-intersection detector against p
 peer check (benchmarks/fit.py), the OpenCL integration of every lion pose against numpy on two
 (benchmarks/integrate.py), the repair and the downstream check (each library's summary.json), S1's skeletal
 deformation next to S1 Fig. 12-13 (benchmarks/skeletal.py, which also runs alone), S0 vs the medial
-repair on every pose (benchmarks/repairs.py, which also runs alone; the pipeline runs with the downstream
-check towards both repairs), and S4's volumetric editing next to S4 Table 3.1 (benchmarks/volumetric.py, which
-also runs alone). Everything is collected into
+repair and the volumetric fill on every pose (benchmarks/repairs.py, which also runs alone; the pipeline runs
+with the downstream check towards every repair), S4's volumetric editing and transfer next to S4 Table 3.1
+(benchmarks/volumetric.py, which also runs alone) and S4's marker animation against the horse gallop
+(benchmarks/markers.py, which also runs alone). Everything is collected into
 ``BENCHMARKS.md`` and ``BENCHMARKS.json`` (plus ``blocked_vs_full.png``) next to the per-library
 pieces (``summary-<library>.md``: the library's per-pose summary); the same command on the same
 data gives the same tables, times aside.
@@ -199,6 +200,8 @@ def report(info, benchmarks, note, out):
     lines += (out / "skeletal.md").read_text().splitlines() + [""]
     lines += (out / "repairs.md").read_text().splitlines() + [""]
     lines += (out / "volumetric.md").read_text().splitlines() + [""]
+    if (out / "markers.md").exists():  # horse-gallop present
+        lines += (out / "markers.md").read_text().splitlines() + [""]
     return "\n".join(lines)
 
 
@@ -218,6 +221,7 @@ def main():
     run(sys.executable, ROOT / "benchmarks" / "skeletal.py", "--out", out, "--threads", args.cores)
     run(sys.executable, ROOT / "benchmarks" / "repairs.py", "--out", out, "--cores", args.cores)
     run(sys.executable, ROOT / "benchmarks" / "volumetric.py", "--out", out, "--threads", args.cores)
+    run(sys.executable, ROOT / "benchmarks" / "markers.py", "--out", out, "--threads", args.cores)
     note += f" Wall time of the whole benchmark: {(time.perf_counter() - start) / 60:.1f} min."
     (out / "BENCHMARKS.md").write_text(report(info, benchmarks, note.strip(), out))
     (out / "BENCHMARKS.json").write_text(json.dumps({"machine": info, "libraries": benchmarks}, indent=1))
