@@ -1,10 +1,8 @@
-"""Bad medial centres: outside, crossing, non-finite; the exact capped surface distance."""
+"""Bad medial centres: outside, crossing, non-finite."""
 
 import numpy as np
 
 from conftest import icosphere
-from posefix.mesh.geometry import point_triangle_distance
-from posefix.mesh.distance import surface_distance_below
 from posefix.skeletal.quality import bad_centres
 
 
@@ -26,13 +24,3 @@ def test_tolerance_decides_moderate_crossings():
     S, R = np.zeros((1, 3)), np.array([1.5])  # clearance about 1 / 1.5
     assert bad_centres(V, F, S, R, tol=0.2).crossing[0]
     assert not bad_centres(V, F, S, R, tol=0.5).crossing[0]
-
-
-def test_surface_distance_is_exact_below_the_limit():
-    V, F = icosphere(2)
-    V = V * [1.0, 0.6, 0.3]
-    P = np.random.default_rng(0).uniform(-1.2, 1.2, size=(300, 3))
-    limit = np.random.default_rng(1).uniform(0.0, 0.8, size=len(P))
-    A, B, C = (np.repeat(V[F[:, i]][None], len(P), 0).reshape(-1, 3) for i in range(3))
-    brute = point_triangle_distance(np.repeat(P, len(F), 0), A, B, C).reshape(len(P), len(F)).min(1)
-    assert np.allclose(surface_distance_below(V, F, P, limit), np.minimum(brute, limit), atol=1e-12)

@@ -1,12 +1,11 @@
 """S4's marker animation: markers at rest leave the mesh at rest, a rigid motion of the markers moves the
-mesh rigidly, CSV and NPZ tracks give the same frames, and the stage's clear errors."""
+mesh rigidly, the stage writes the same library from CSV and NPZ tracks and names a marker far off."""
 
 import numpy as np
 import pytest
 
 from conftest import ROOT, run_stage
 from posefix.mesh.rotations import rotation_exp
-from posefix.pipeline.errors import InputError
 from posefix.pipeline.marker_tracks import MarkerTracks, read_tracks, write_tracks_csv
 from posefix.pipeline.meshes import read_mesh
 from posefix.volumetric.markers import MarkerAnimator
@@ -42,36 +41,6 @@ def test_rigidly_moved_markers_move_the_mesh_rigidly(bar):
     errors = [np.abs(MarkerAnimator(V, X, T, markers).animate(tracks, it, it).frames - expected).max()
               for it in (0, 3, 10)]  # six markers pin a turn slowly: 0.24 after 3 iterations a frame, 0.038 after 10
     assert errors[0] > errors[1] > errors[2] > 1e-2
-
-
-def tracks_of(markers, count=4):
-    frames = np.arange(10, 10 + count)
-    return MarkerTracks(frames, np.array([f"m{i}" for i in range(len(markers))]),
-                        np.stack([markers + [0.05 * k, 0.0, 0.02 * k] for k in range(count)]))
-
-
-def test_csv_and_npz_of_the_same_tracks_read_the_same(bar, tmp_path):
-    tracks = tracks_of(bar[3])
-    write_tracks_csv(tmp_path / "t.csv", tracks)
-    lines = (tmp_path / "t.csv").read_text().splitlines()
-    (tmp_path / "shuffled.csv").write_text("\n".join([lines[0]] + lines[1:][::-1]) + "\n")  # any row order
-    np.savez(tmp_path / "t.npz", tracks=tracks.positions, markers=tracks.markers, frames=tracks.frames)
-    for path in ("t.csv", "shuffled.csv", "t.npz"):
-        read = read_tracks(tmp_path / path)
-        assert np.array_equal(read.positions, tracks.positions), path
-        assert read.frames.tolist() == tracks.frames.tolist() and read.markers.tolist() == tracks.markers.tolist()
-
-
-@pytest.mark.parametrize("text, problem", [
-    ("frame,marker,x\n0,a,1\n", "header must be frame,marker,x,y,z"),
-    ("frame,marker,x,y,z\n0,a,0,0,0\n0,b,0,0,0\n1,a,0,0,0\n", "marker b appears 0 times in frame 1"),
-    ("frame,marker,x,y,z\n0,a,0,0,zero\n", "line 2: frame must be an integer and x, y, z numbers"),
-    ("frame,marker,x,y,z\n0,a,0,0,nan\n", "marker a has no finite position in frame 0"),
-])
-def test_bad_tracks_are_named_with_the_problem(tmp_path, text, problem):
-    (tmp_path / "bad.csv").write_text(text)
-    with pytest.raises(InputError, match="bad.csv: " + problem):
-        read_tracks(tmp_path / "bad.csv")
 
 
 def test_the_stage_writes_the_same_library_from_csv_and_npz(tmp_path):
