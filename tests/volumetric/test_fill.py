@@ -42,3 +42,4 @@ def test_a_dent_pushed_through_the_bar_is_filled_without_new_intersections(bar):
     assert result.target_faces > 0 and not result.new_faces.any() and result.rings == 0
     assert np.abs(result.X - moved(V)).max() <= 1e-6
     assert np.array_equal(result.X[~dent], moved(pushed)[~dent])  # V_C reproduced exactly
+    assert np.array_equal(fill.repair(moved(pushed), ~dent, iterations=40, max_rings=0).X, result.X)

@@ -124,7 +124,7 @@ class VolumetricFill:
         start = time.perf_counter()
         target_faces = int((self.intersecting(target) & ~self.reference_faces).sum())
         best = None
-        for rings in [0] + [2 ** k for k in range(int(np.log2(max_rings)) + 1) if 2 ** k <= max_rings]:
+        for rings in [0] + [2 ** k for k in range(int(max_rings).bit_length())]:
             free = grow_rings(~np.asarray(constrained, dtype=bool), self.adjacency, rings)
             if best is not None and free.mean() > max_free:
                 break
