@@ -134,9 +134,11 @@ def figure(errors, counts, out):
     ax.set(xlabel="gallop frame", ylabel="vertex error, % of bbox diagonal", yscale="log",
            title=f"{BAR['markers']} markers: error per frame (grey: the bar)")
     ax.legend(fontsize=7, ncol=3)
+    colours = {"ground truth": "black", "S4": "C0", "linear": "C1", "harmonic": "C2"}
     for name, c in counts.items():
-        bx.plot(c, label=name)
-    bx.set(xlabel="gallop frame", ylabel="intersecting faces", title="self-intersections per frame")
+        bx.plot(c, label=name, color=colours[name])
+    bx.set(xlabel="gallop frame", ylabel="intersecting faces", yscale="symlog",
+           title="self-intersections per frame")
     bx.legend(fontsize=8)
     fig.tight_layout()
     fig.savefig(out, dpi=110, metadata={"Software": None})
