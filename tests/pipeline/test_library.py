@@ -52,6 +52,17 @@ def test_discovery_with_explicit_reference_and_subset(library):
     assert lib.reference.name == "a" and [p.name for p in lib.poses] == ["b"]
 
 
+def test_hidden_files_and_os_metadata_are_not_read(tmp_path, library):
+    folder, _, _ = library
+    (folder / "._a.obj").write_bytes(b"\x00\x05\x16\x07AppleDouble")  # macOS metadata beside a.obj
+    (folder / ".b-backup.obj").write_text("garbage")
+    (folder / "__MACOSX").mkdir()
+    (folder / "__MACOSX" / "._sphere-reference.obj").write_bytes(b"\x00\x05")
+    lib = discover_library(folder)
+    assert [p.name for p in lib.poses] == ["a", "b"] and lib.reference.name == "sphere-reference"
+    run_stage("validate", "--library", folder, "--out", tmp_path / "library.h5")
+
+
 def test_valid_library_passes(tmp_path, library):
     folder, _, _ = library
     run_stage("validate", "--library", folder, "--out", tmp_path / "library.h5")

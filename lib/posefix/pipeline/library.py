@@ -38,7 +38,8 @@ class Library:
 
 
 def discover_library(folder, reference=None, poses=None, name=None):
-    """Find the reference and target poses in a folder.
+    """Find the reference and target poses in a folder (hidden files, e.g. macOS ``._*``, and sub-folders,
+    e.g. ``__MACOSX/``, are not read).
 
     Parameters
     ----------
@@ -60,7 +61,8 @@ def discover_library(folder, reference=None, poses=None, name=None):
     folder = Path(folder)
     if not folder.is_dir():
         raise InputError(folder, "not a folder")
-    files = [mesh_file(p) for p in sorted(folder.iterdir()) if p.is_file() or p.is_symlink()]
+    files = [mesh_file(p) for p in sorted(folder.iterdir())
+             if (p.is_file() or p.is_symlink()) and not p.name.startswith(".")]  # hidden: ._x.obj (macOS), ...
     files = [f for f in files if f is not None]
     if not files:
         raise InputError(folder, f"no mesh files {MESH_SUFFIXES}")
