@@ -92,6 +92,14 @@ BAD_FILES = [  # file name, bytes, what the one error line must say
     ("c.off", b"OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 99999\n", "out of range"),
     ("c.obj", b"v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 2 3\nf 0 2 4\n", "line 6: face vertex index 0"),
     ("c.obj", b"v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n", "only triangle meshes"),
+    # each kind of broken OBJ has its own message, indices 1-based as in the file
+    ("c.obj", b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 999\n", "line 4: face vertex index 999 is out of range 1..3"),
+    ("c.obj", b"v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 2 3\nf 1 2", "line 6: a face with 2 vertices (truncated"),
+    ("c.obj", b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nv 0.5 0", "line 5: a vertex with 2 coordinates (truncated"),
+    ("c.obj", b"ply\nformat ascii 1.0\nelement vertex 3\n", "PLY data in a .obj file (wrong extension?)"),
+    ("c.obj", b"OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n", "OFF data in a .obj file"),
+    ("c.obj", bytes(range(256)) * 8, "binary data, not an OBJ text file"),
+    ("c.obj", b"hello world\nthis is no mesh\n", "no vertex lines"),
 ]
 
 

@@ -15,11 +15,47 @@ def declared_counts(data):
 
 
 def check(path, data):
-    """OBJ indices start at 1; trimesh would silently renumber a 0, so reject it here."""
+    """Problems trimesh would hide or word poorly, each as one :class:`InputError` naming the line.
+
+    Binary data (garbage, or another format named .obj), a file of another mesh format, ``v`` lines
+    with fewer than three coordinates or ``f`` lines with fewer than three vertices (a truncated file),
+    index 0 (OBJ indices start at 1; trimesh would renumber it) and indices past the last ``v`` line, both
+    reported 1-based as in the file.
+    """
+    if b"\x00" in data[:4096]:
+        raise InputError(path, "binary data, not an OBJ text file")
+    first = next((line.split()[0] for line in data.splitlines() if line.strip() and not line.lstrip().startswith(b"#")),
+                 b"")
+    if first.lower() in (b"ply", b"off", b"coff", b"noff", b"solid"):
+        raise InputError(path, f"{first.decode().upper()} data in a .obj file (wrong extension?)")
+    vertices = declared_counts(data)[0]
+    if vertices == 0:
+        raise InputError(path, "no vertex lines ('v x y z'): not an OBJ mesh")
     for number, line in enumerate(data.splitlines(), 1):
         tokens = line.split()
-        if tokens and tokens[0] == b"f" and any(t.split(b"/")[0] in (b"0", b"-0") for t in tokens[1:]):
+        if tokens[:1] == [b"v"] and len(tokens) < 4:
+            raise InputError(path, f"line {number}: a vertex with {len(tokens) - 1} coordinates (truncated file?)")
+        if tokens[:1] == [b"f"]:
+            _check_face(path, number, tokens[1:], vertices)
+
+
+def _check_face(path, number, corners, vertices):
+    """One ``f`` line: at least three corners, 1-based indices within the file's ``v`` lines (negative:
+    relative, left to trimesh)."""
+    if len(corners) < 3:
+        raise InputError(path, f"line {number}: a face with {len(corners)} vertices (truncated file?)")
+    for corner in corners:
+        index = corner.split(b"/")[0]
+        try:
+            value = int(index)
+        except ValueError:
+            raise InputError(path, f"line {number}: face vertex index {index.decode(errors='replace')!r} is not "
+                                   "an integer") from None
+        if value == 0:
             raise InputError(path, f"line {number}: face vertex index 0 (OBJ indices start at 1)")
+        if value > vertices:
+            raise InputError(path, f"line {number}: face vertex index {value} is out of range 1..{vertices} "
+                                   "(OBJ indices start at 1)")
 
 
 def encode(V, F):
