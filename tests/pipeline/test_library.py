@@ -63,6 +63,14 @@ def test_hidden_files_and_os_metadata_are_not_read(tmp_path, library):
     run_stage("validate", "--library", folder, "--out", tmp_path / "library.h5")
 
 
+def test_a_library_too_small_for_the_fit_stops_in_validate(tmp_path):
+    folder = tmp_path / "tiny"
+    V, F = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0]]), np.array([[0, 1, 2]])
+    write_mesh(folder / "tri-reference.obj", V, F)
+    write_mesh(folder / "tri-01.obj", V * 2.0, F)
+    _expect_error(tmp_path, folder, "tri-reference.obj", "reference has 3 vertices", "at least 15")
+
+
 def test_valid_library_passes(tmp_path, library):
     folder, _, _ = library
     run_stage("validate", "--library", folder, "--out", tmp_path / "library.h5")

@@ -15,6 +15,7 @@ import numpy as np
 from posefix.mesh.geometry import bbox_diagonal, face_areas
 from posefix.pipeline.errors import InputError
 from posefix.pipeline.meshes import MESH_SUFFIXES, MeshFile, mesh_file, read_mesh
+from posefix.spacetime.rbf import POLY_TERMS
 
 DEGENERATE_AREA_REL = 1e-14
 """Reference faces with area below this times the squared bbox diagonal count as zero-area."""
@@ -106,7 +107,12 @@ def _pick_reference(folder, files, by_name, reference):
 
 
 def check_reference(path, V, F):
-    """Raise :class:`InputError` when the reference has degenerate or zero-area faces."""
+    """Raise :class:`InputError` when the reference is too small for S0's fit (fewer vertices than the
+    :data:`~posefix.spacetime.rbf.POLY_TERMS` of its space-time polynomial) or has degenerate or zero-area
+    faces."""
+    if len(V) < POLY_TERMS:
+        raise InputError(path, f"reference has {len(V)} vertices: the repair needs at least {POLY_TERMS} (the terms "
+                               "of the fit's quadratic space-time polynomial)")
     repeated = (F[:, 0] == F[:, 1]) | (F[:, 1] == F[:, 2]) | (F[:, 2] == F[:, 0])
     if repeated.any():
         f = int(np.argmax(repeated))
