@@ -34,7 +34,8 @@ def build_parser():
     parser.add_argument("--keyframes", required=True, help="keyframes.h5 of the pose (reference positions)")
     parser.add_argument("--out", required=True, help="integrate.h5 to write")
     parser.add_argument("--device", choices=("auto", "cpu", "gpu", "numpy"), default="auto",
-                        help="OpenCL device type, or the numpy backend")
+                        help="OpenCL device type (cpu, gpu: that one or an error; auto: a GPU, else a CPU, else "
+                             "numpy with a warning), or the numpy backend")
     defaults = library_defaults(rk45)
     parser.add_argument("--rtol", type=float, default=defaults["rtol"], help="relative tolerance per step")
     parser.add_argument("--atol-rel", type=float, default=1e-7,
@@ -62,6 +63,8 @@ def main(args, log):
     if args.device != "numpy":
         from posefix.spacetime.integration_opencl import select_device
         device, text = select_device(args.device)
+        if device is None and args.device != "auto":  # an explicit request is honoured or fails
+            raise InputError("--device", f"{args.device} requested but {text} (use auto to fall back to numpy)")
         if device is None:
             log.warning("WARNING: %s; integrating with the numpy backend instead (slower)", text)
         else:

@@ -281,3 +281,15 @@ def test_skeletal_pose_rejects_a_bad_rig_in_one_line(authored, tmp_path):
     assert proc.returncode == 2 and proc.stderr.strip().splitlines() == [
         f"posefix skeletal_pose: error: {rig}: pose 'p': unknown joint(s) b"]
     assert not (tmp_path / "out").exists() and not (tmp_path / "a.h5").exists()
+
+
+def test_an_explicit_device_request_is_honoured_or_fails(demo_artifacts, tmp_path):
+    from posefix.spacetime.integration_opencl import select_device
+    if select_device("gpu")[0] is not None:
+        pytest.skip("this machine has a GPU: the request is honoured")
+    args = ["--fit", demo_artifacts / "fit.h5", "--constraints", demo_artifacts / "constraints.h5",
+            "--keyframes", demo_artifacts / "keyframes.h5", "--out", tmp_path / "i.h5"]
+    proc = run_stage("integrate", *args, "--device", "gpu", check=False)
+    errors = [line for line in proc.stderr.splitlines() if "error:" in line]
+    assert proc.returncode == 2 and len(errors) == 1 and "--device: gpu requested but no gpu" in errors[0]
+    assert not (tmp_path / "i.h5").exists()
