@@ -2,6 +2,7 @@
 
 import hashlib
 import os
+from pathlib import Path
 
 import pytest
 from matplotlib.figure import Figure
@@ -42,3 +43,14 @@ def _umask():
     mask = os.umask(0)
     os.umask(mask)
     return mask
+
+
+def test_a_full_disk_names_the_file_being_written(tmp_path):
+    import errno
+    target = tmp_path / "out" / "fit.h5"
+    with pytest.raises(OSError) as caught:
+        with atomic_path(target) as tmp:
+            Path(tmp).write_bytes(b"partial")
+            raise OSError(errno.ENOSPC, "No space left on device")  # what a failed write() raises
+    assert caught.value.filename == str(target) and caught.value.errno == errno.ENOSPC
+    assert not any((tmp_path / "out").iterdir())

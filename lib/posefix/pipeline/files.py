@@ -17,7 +17,8 @@ def atomic_path(path):
     """A temporary path next to ``path`` to write to; renamed to ``path`` when the block succeeds.
 
     The parent folder is created. On any exception the temporary file is removed and ``path`` is
-    left untouched, so a reader never sees a partial file.
+    left untouched, so a reader never sees a partial file; an ``OSError`` that names no file (a full
+    disk) is raised again naming ``path``.
 
     Examples
     --------
@@ -31,6 +32,10 @@ def atomic_path(path):
     try:
         yield tmp
         _publish(tmp, path)
+    except OSError as exc:  # a full disk says "No space left on device" without a file: name the one written
+        if exc.filename not in (None, tmp):
+            raise
+        raise OSError(exc.errno, exc.strerror or str(exc), str(path)) from exc
     finally:
         if os.path.exists(tmp):
             os.unlink(tmp)
