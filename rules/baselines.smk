@@ -11,7 +11,7 @@ FILL = config["repair_volumetric"]
 rule skeleton:
     input:
         reference=LIBRARY.reference.path,
-        library=rules.validate.output[0],
+        checked=rules.validate_reference.output[0],
     output:
         f"{RESULTS}/skeleton.h5",
     params:
@@ -19,6 +19,7 @@ rule skeleton:
                          ("medial", "tol", "smooth_iters", "smooth_step")),
         python=PYTHON,
         script=stage_script("skeleton"),
+        code=stage_code("skeleton"),
     threads: 1
     log:
         f"{RESULTS}/logs/skeleton.log",
@@ -41,6 +42,7 @@ rule repair_medial:
                          ("margin", "tau", "neighbours", "max_reach", "max_iters")),
         python=PYTHON,
         script=stage_script("repair_medial"),
+        code=stage_code("repair_medial"),
     threads: MEDIAL["threads"]
     log:
         f"{RESULTS}/logs/{{pose}}/repair_medial.log",
@@ -54,12 +56,13 @@ rule repair_medial:
 rule tet_mesh:
     input:
         reference=LIBRARY.reference.path,
-        library=rules.validate.output[0],
+        checked=rules.validate_reference.output[0],
     output:
         f"{RESULTS}/tets.h5",
     params:
         python=PYTHON,
         script=stage_script("tet_mesh"),
+        code=stage_code("tet_mesh"),
     threads: 1
     log:
         f"{RESULTS}/logs/tet_mesh.log",
@@ -83,6 +86,7 @@ rule repair_volumetric:
                          ("iterations", "point_weight", "max_rings", "max_free")),
         python=PYTHON,
         script=stage_script("repair_volumetric"),
+        code=stage_code("repair_volumetric"),
     threads: FILL["threads"]
     log:
         f"{RESULTS}/logs/{{pose}}/repair_volumetric.log",
@@ -106,6 +110,7 @@ rule export_baseline:
     params:
         python=PYTHON,
         script=stage_script("export"),
+        code=stage_code("export"),
     threads: 1
     log:
         f"{RESULTS}/logs/{{pose}}/export_{{baseline}}{{suffix}}.log",

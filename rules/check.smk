@@ -32,6 +32,7 @@ rule downstream:
         ),
         python=PYTHON,
         script=stage_script("downstream"),
+        code=stage_code("downstream"),
     threads: config["downstream"]["threads"]
     log:
         f"{RESULTS}/logs/{{pose}}/downstream.log",

@@ -9,8 +9,11 @@ from snakemake.utils import validate
 
 from posefix.pipeline import demo
 from posefix.pipeline.cli import named_options
+from posefix.pipeline.config_check import config_problems
 from posefix.pipeline.errors import InputError
+from posefix.pipeline.fingerprint import code_fingerprint
 from posefix.pipeline.library import Library, discover_library
+from posefix.pipeline.locks import clear_stale_locks
 from posefix.pipeline.meshes import mesh_file
 from posefix.report.contents import POSE_FIGURES, TIMED_STAGES
 
@@ -39,7 +42,16 @@ for _section in ("demo", "keyframes", "classify", "constraints", "fit", "integra
 if isinstance(config.get("baselines"), str):  # --config baselines=medial, baselines=[] or baselines=a,b
     _value = config["baselines"].strip()
     config["baselines"] = yaml.safe_load(_value) if _value.startswith("[") else [b for b in _value.split(",") if b]
-validate(config, "../schemas/config.schema.yaml")
+_problems = config_problems(config, yaml.safe_load((Path(workflow.basedir) / "schemas" / "config.schema.yaml").read_text()))
+if _problems:  # one line per problem, naming the key; no schema dump
+    sys.exit("\n".join(f"posefix: error: config: {p}" for p in _problems))
+validate(config, "../schemas/config.schema.yaml")  # fills in the schema's defaults
+
+if workflow.is_main_process:  # not in the jobs a cluster executor starts: they cannot see the main process
+    _stale = clear_stale_locks(".")
+    if _stale:
+        print(f"posefix: removed {len(_stale)} stale Snakemake lock(s) of an interrupted run in {Path.cwd()} "
+              "(no other Snakemake runs there)", file=sys.stderr)
 
 PYTHON = sys.executable  # the interpreter running snakemake: the venv's under `make run`
 
@@ -47,6 +59,12 @@ PYTHON = sys.executable  # the interpreter running snakemake: the venv's under `
 def stage_script(name):
     """Absolute path of ``stages/<name>.py`` (rules work from any --directory)."""
     return str(Path(workflow.basedir) / "stages" / f"{name}.py")
+
+
+def stage_code(name):
+    """Fingerprint of ``stages/<name>.py`` and the posefix modules it imports (a param of its rule: changed
+    code reruns the stage and what depends on it, and nothing else)."""
+    return code_fingerprint(stage_script(name), Path(workflow.basedir) / "lib")
 
 
 def _pose_list(value):

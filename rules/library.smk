@@ -1,5 +1,5 @@
-# The pose library: the built-in demo (only without --config library=...) and the validation of
-# every file before any pose is processed.
+# The pose library: the built-in demo (only without --config library=...), the validation of the
+# reference once and of every pose on its own (adding or fixing a pose reruns only that pose).
 
 rule demo:
     output:
@@ -10,6 +10,7 @@ rule demo:
         around=config["demo"]["around"],
         python=PYTHON,
         script=stage_script("demo"),
+        code=stage_code("demo"),
     threads: 1
     log:
         f"{RESULTS}/logs/demo.log",
@@ -20,23 +21,47 @@ rule demo:
         " --around {params.around} --log {log:q}"
 
 
-rule validate:
+rule validate_reference:
     input:
-        library_files(),
+        LIBRARY.reference.path,
     output:
-        f"{RESULTS}/library.h5",
+        f"{RESULTS}/reference.h5",
     params:
-        folder=lambda wildcards, input: os.path.dirname(input[0]),
+        folder=LIBRARY.folder,
         reference=LIBRARY.reference.name,
-        poses=",".join(POSES),
         name=LIBRARY.name,
         python=PYTHON,
         script=stage_script("validate"),
+        code=stage_code("validate"),
     threads: 1
     log:
-        f"{RESULTS}/logs/validate.log",
+        f"{RESULTS}/logs/validate_reference.log",
     benchmark:
-        f"{RESULTS}/benchmarks/validate.tsv"
+        f"{RESULTS}/benchmarks/validate_reference.tsv"
     shell:
         "{params.python:q} {params.script:q} --library {params.folder:q} --reference {params.reference:q}"
-        " --poses {params.poses:q} --name {params.name:q} --out {output:q} --log {log:q}"
+        " --reference-only --name {params.name:q} --out {output:q} --log {log:q}"
+
+
+rule validate:
+    input:
+        reference=LIBRARY.reference.path,
+        target=pose_file,
+        checked=rules.validate_reference.output[0],
+    output:
+        f"{RESULTS}/{{pose}}/validate.h5",
+    params:
+        folder=LIBRARY.folder,
+        reference=LIBRARY.reference.name,
+        name=LIBRARY.name,
+        python=PYTHON,
+        script=stage_script("validate"),
+        code=stage_code("validate"),
+    threads: 1
+    log:
+        f"{RESULTS}/logs/{{pose}}/validate.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/{{pose}}/validate.tsv"
+    shell:
+        "{params.python:q} {params.script:q} --library {params.folder:q} --reference {params.reference:q}"
+        " --poses {wildcards.pose:q} --name {params.name:q} --out {output:q} --log {log:q}"

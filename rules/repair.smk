@@ -22,6 +22,7 @@ rule verify:
         ),
         python=PYTHON,
         script=stage_script("verify"),
+        code=stage_code("verify"),
     threads: config["verify"]["threads"]
     log:
         f"{RESULTS}/logs/{{pose}}/verify.log",
@@ -46,6 +47,7 @@ rule export:
     params:
         python=PYTHON,
         script=stage_script("export"),
+        code=stage_code("export"),
     threads: 1
     log:
         f"{RESULTS}/logs/{{pose}}/export{{suffix}}.log",

@@ -18,6 +18,7 @@ rule summary:
         baselines=f"--baselines {','.join(BASELINES)}" if BASELINES else "",
         python=PYTHON,
         script=stage_script("summary"),
+        code=stage_code("summary"),
     threads: 1
     log:
         f"{RESULTS}/logs/summary.log",
@@ -42,6 +43,7 @@ rule render:
         baselines=lambda wildcards: named_options("--baseline", baseline_artifacts(wildcards.pose)),
         python=PYTHON,
         script=stage_script("render"),
+        code=stage_code("render"),
     threads: 1
     log:
         f"{RESULTS}/logs/{{pose}}/render.log",
@@ -72,6 +74,7 @@ rule overview:
     params:
         python=PYTHON,
         script=stage_script("overview"),
+        code=stage_code("overview"),
     threads: 1
     log:
         f"{RESULTS}/logs/overview.log",

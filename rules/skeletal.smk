@@ -19,6 +19,7 @@ rule author:
     params:
         python=PYTHON,
         script=stage_script("skeletal_pose"),
+        code=stage_code("skeletal_pose"),
         options=" ".join(f"--{key.replace('_', '-')} {AUTHOR[key]}" for key in
                          ("medial", "tol", "smooth_iters", "smooth_step", "falloff", "min_sine", "min_area", "tau",
                           "margin", "neighbours", "max_iters")),

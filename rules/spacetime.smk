@@ -3,7 +3,7 @@
 
 rule keyframes:
     input:
-        library=rules.validate.output[0],
+        checked=rules.validate.output[0],
         reference=LIBRARY.reference.path,
         target=pose_file,
     output:
@@ -18,6 +18,7 @@ rule keyframes:
         ),
         python=PYTHON,
         script=stage_script("keyframes"),
+        code=stage_code("keyframes"),
     threads: config["keyframes"]["threads"]
     log:
         f"{RESULTS}/logs/{{pose}}/keyframes.log",
@@ -41,6 +42,7 @@ rule classify:
         exclude=exclude_args,
         python=PYTHON,
         script=stage_script("classify"),
+        code=stage_code("classify"),
     threads: config["classify"]["threads"]
     log:
         f"{RESULTS}/logs/{{pose}}/classify.log",
@@ -64,6 +66,7 @@ rule constraints:
         tangents=config["constraints"]["tangents"],
         python=PYTHON,
         script=stage_script("constraints"),
+        code=stage_code("constraints"),
     threads: config["constraints"]["threads"]
     log:
         f"{RESULTS}/logs/{{pose}}/constraints.log",
@@ -85,6 +88,7 @@ rule fit:
         checkpoint=lambda wildcards, output: output[0].replace(".h5", ".checkpoint"),
         python=PYTHON,
         script=stage_script("fit"),
+        code=stage_code("fit"),
     threads: config["fit"]["threads"]
     resources:
         mem_mb=int(1000 * config["fit"]["memory_gb"]) + 1000,
@@ -112,6 +116,7 @@ rule integrate:
         vec=config["integrate"]["vec"],
         python=PYTHON,
         script=stage_script("integrate"),
+        code=stage_code("integrate"),
     threads: config["integrate"]["threads"]
     log:
         f"{RESULTS}/logs/{{pose}}/integrate.log",

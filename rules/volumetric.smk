@@ -22,6 +22,7 @@ rule author_volumetric:
         options=" ".join(f"--{key.replace('_', '-')} {VOLUMETRIC[key]}" for key in ("tet_vertices", "iterations", "frames")),
         python=PYTHON,
         script=stage_script("volumetric_pose"),
+        code=stage_code("volumetric_pose"),
     threads: VOLUMETRIC["threads"]
     log:
         f"{VOLUMETRIC_AUTHORED}/volumetric_pose.log",
@@ -54,6 +55,7 @@ rule animate_volumetric:
                        for name, box in ANIMATE["rigid"].items()),
         python=PYTHON,
         script=stage_script("volumetric_animate"),
+        code=stage_code("volumetric_animate"),
     threads: ANIMATE["threads"]
     log:
         f"{ANIMATED}/volumetric_animate.log",
