@@ -34,6 +34,7 @@ rule repair_medial:
     input:
         reference=LIBRARY.reference.path,
         target=pose_file,
+        checked=rules.validate.output[0],
         skeleton=rules.skeleton.output[0],
     output:
         f"{RESULTS}/{{pose}}/medial.h5",
