@@ -91,13 +91,15 @@ def main(args, log):
     points, values = data["points"], data["values"]
     log.info("%d constraints; eps = %.3g (%.3g d), max %d centres, %s selection, %s update",
              len(points), settings.eps, args.eps_rel, args.max_centers, args.selection, args.update)
-    with timings.step("start"):
-        try:
-            fit, resumed = checkpoint.start_or_resume(points, values, settings, folder, key)
-        except FactorizationError as exc:
-            raise InputError(args.constraints, str(exc)) from None
-    with timings.step("iterate"):
-        reason = iterate(fit, on_iteration=checkpoint.committer(folder, key, _settings_dict(settings), fit, resumed))
+    with checkpoint.locked(folder):
+        with timings.step("start"):
+            try:
+                fit, resumed = checkpoint.start_or_resume(points, values, settings, folder, key)
+            except FactorizationError as exc:
+                raise InputError(args.constraints, str(exc)) from None
+        with timings.step("iterate"):
+            reason = iterate(fit, on_iteration=checkpoint.committer(folder, key, _settings_dict(settings), fit,
+                                                                    resumed))
     last = fit.history[-1]
     log.info("stopped (%s) at %d centres: max error %.3g d, rms %.3g d, max kappa %.3g", reason, fit.n,
              last["max_error"] / d, last["rms_error"] / d, max(r["condition"] for r in fit.history))

@@ -1,9 +1,11 @@
 """Fit checkpoints: crash-safe commits, another key or a half-written iteration is ignored."""
 
 import numpy as np
+import pytest
 
 from conftest import smooth_field_problem
 from posefix.pipeline import checkpoint
+from posefix.pipeline.errors import InputError
 from posefix.spacetime.fit import FitSettings, iterate, start_fit
 
 
@@ -38,3 +40,13 @@ def test_a_resumed_fit_continues_exactly_as_an_uninterrupted_one(tmp_path):
     iterate(whole)
     assert np.array_equal(again.order, whole.order) and np.array_equal(again.weights, whole.weights)
     assert len(checkpoint.load(tmp_path, "k")[1]) == len(whole.history)
+
+
+def test_a_second_writer_of_a_checkpoint_stops_at_once(tmp_path):
+    folder = tmp_path / "fit.checkpoint"
+    with checkpoint.locked(folder):
+        with pytest.raises(InputError, match="another fit is writing this checkpoint"):
+            with checkpoint.locked(folder):
+                pass
+    with checkpoint.locked(folder):  # free again once the first is done
+        pass

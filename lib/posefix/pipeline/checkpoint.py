@@ -16,14 +16,17 @@ with the same settings gives (:func:`posefix.spacetime.fit.truncate_history`), a
 :func:`committer` is the ``on_iteration`` callback that commits every iteration.
 """
 
+import fcntl
 import io
 import json
 import logging
 import os
+from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
 
+from posefix.pipeline.errors import InputError
 from posefix.pipeline.files import atomic_write_bytes
 from posefix.spacetime.fit import resume_fit, start_fit, truncate_history
 
@@ -32,6 +35,24 @@ log = logging.getLogger(__name__)
 _APPENDED_ROWS = ("order", "solver/H", "solver/Pi")     # grow along axis 0
 _APPENDED_COLS = ("solver/G",)                          # grows along axis 1
 _FIXED = ("solver/pi_p", "solver/phi_pp")               # set once
+
+
+@contextmanager
+def locked(folder):
+    """Hold an advisory lock on the checkpoint ``folder`` (created) while the block runs; :class:`InputError`
+    at once when another process holds it (two runs writing one results folder)."""
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    with open(folder / "lock", "w") as handle:
+        try:
+            fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            raise InputError(folder, "another fit is writing this checkpoint (two runs on one results folder?); "
+                                     "let it finish or use another results folder") from None
+        try:
+            yield
+        finally:
+            fcntl.flock(handle, fcntl.LOCK_UN)
 
 
 def start_or_resume(points, values, settings, folder, key):
