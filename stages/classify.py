@@ -8,7 +8,7 @@ intersect in the reference are added back (S0 §4.3). See ``posefix.spacetime.cl
 
 import time
 
-import posefix  # noqa: F401  (runtime defaults before numpy)
+import posefix.pipeline.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; runtime defaults before numpy)
 import numpy as np
 
 from posefix.mesh.contacts import contact_vertices

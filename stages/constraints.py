@@ -6,7 +6,7 @@ space-time points y = (c(t_i), tau t_i) and tangents c'(t_i) the field must inte
 ``posefix.spacetime.constraints``.
 """
 
-import posefix  # noqa: F401  (runtime defaults before numpy)
+import posefix.pipeline.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; runtime defaults before numpy)
 
 from posefix.mesh.geometry import bbox_diagonal
 from posefix.pipeline.artifacts import read_artifact, write_artifact

@@ -7,7 +7,7 @@ Deterministic: the same seed gives byte-identical files.
 
 from pathlib import Path
 
-import posefix  # noqa: F401  (runtime defaults before numpy)
+import posefix.pipeline.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; runtime defaults before numpy)
 
 from posefix.mesh.intersections import intersecting_faces, self_intersecting_pairs
 from posefix.pipeline import demo

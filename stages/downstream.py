@@ -9,7 +9,7 @@ iterations, convergence, stop reason and the error after every iteration, and (`
 of the energy per iteration (``posefix.report.figures.downstream_history``).
 """
 
-import posefix  # noqa: F401  (runtime defaults before numpy)
+import posefix.pipeline.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; runtime defaults before numpy)
 
 from posefix.check.downstream import downstream_check
 from posefix.check.gauss_newton import STOP_REASONS, SolverSettings

@@ -5,7 +5,7 @@ target's text is kept line by line except for the vertex (and per-vertex normal)
 ``posefix.pipeline.meshes.write_like``).
 """
 
-import posefix  # noqa: F401  (runtime defaults before numpy)
+import posefix.pipeline.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; runtime defaults before numpy)
 import numpy as np
 
 from posefix.pipeline.artifacts import read_artifact

@@ -10,7 +10,7 @@ same result as an uninterrupted fit. See ``posefix.spacetime.fit`` and ``posefix
 import json
 from pathlib import Path
 
-import posefix  # noqa: F401  (runtime defaults before numpy)
+import posefix.pipeline.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; runtime defaults before numpy)
 import numpy as np
 
 from posefix.pipeline import checkpoint

@@ -8,7 +8,7 @@ Steps land on the constraint sample times t_i = i/s, where positions are recorde
 
 import os
 
-import posefix  # noqa: F401  (runtime defaults before numpy)
+import posefix.pipeline.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; runtime defaults before numpy)
 import numpy as np
 
 from posefix.pipeline.artifacts import read_artifact, write_artifact

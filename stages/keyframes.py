@@ -8,7 +8,7 @@ t = k/(K-1), the two input poses, and per-face rotation diagnostics.
 import argparse
 from pathlib import Path
 
-import posefix  # noqa: F401  (runtime defaults before numpy)
+import posefix.pipeline.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; runtime defaults before numpy)
 import numpy as np
 
 from posefix.mesh.geometry import bbox_diagonal

@@ -8,7 +8,7 @@ the bar, centres and fallback vertices, seconds per stage, one column per pose) 
 import json
 from pathlib import Path
 
-import posefix  # noqa: F401  (runtime defaults before numpy)
+import posefix.pipeline.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; runtime defaults before numpy)
 
 from posefix.pipeline.cli import run_stage, stage_parser
 from posefix.pipeline.errors import InputError

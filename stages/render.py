@@ -12,7 +12,7 @@ the reference (the same for every pose of a library). Figures are built in ``pos
 import json
 from pathlib import Path
 
-import posefix  # noqa: F401  (runtime defaults before numpy)
+import posefix.pipeline.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; runtime defaults before numpy)
 
 from posefix.mesh.intersections import intersecting_faces, self_intersecting_pairs
 from posefix.pipeline.artifacts import read_artifact, read_baseline

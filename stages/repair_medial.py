@@ -5,7 +5,7 @@ them and runs S1's medial-ball flow until no new self-intersection remains (inte
 has too do not count) or ``--max-iters``. See ``posefix.skeletal.repair``.
 """
 
-import posefix  # noqa: F401  (runtime defaults before numpy)
+import posefix.pipeline.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; runtime defaults before numpy)
 
 from posefix.mesh.geometry import bbox_diagonal
 from posefix.pipeline.artifacts import read_artifact, write_artifact

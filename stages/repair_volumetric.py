@@ -6,7 +6,7 @@ The free region grows by rings until no new self-intersection remains (intersect
 too do not count). See ``posefix.volumetric.fill``.
 """
 
-import posefix  # noqa: F401  (runtime defaults before numpy)
+import posefix.pipeline.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; runtime defaults before numpy)
 
 from posefix.pipeline.artifacts import read_artifact, write_artifact
 from posefix.pipeline.cli import library_defaults, run_stage, stage_parser

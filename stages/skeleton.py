@@ -4,7 +4,7 @@ The medial repair (stage repair_medial) carries these balls into every target po
 ``posefix.skeletal.skeletal_mesh``.
 """
 
-import posefix  # noqa: F401  (runtime defaults before numpy)
+import posefix.pipeline.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; runtime defaults before numpy)
 
 import numpy as np
 

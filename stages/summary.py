@@ -10,7 +10,7 @@ target over S0's ``V_C`` (``classify.h5``) and the rest, measured as S0's.
 import json
 from pathlib import Path
 
-import posefix  # noqa: F401  (runtime defaults before numpy)
+import posefix.pipeline.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; runtime defaults before numpy)
 
 from posefix.pipeline.artifacts import read_artifact, read_baseline
 from posefix.pipeline.cli import run_stage, stage_parser

@@ -5,7 +5,7 @@ Quadric decimation, then a Delaunay tetrahedralization kept inside the reference
 target pose.
 """
 
-import posefix  # noqa: F401  (runtime defaults before numpy)
+import posefix.pipeline.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; runtime defaults before numpy)
 
 from posefix.pipeline.artifacts import write_artifact
 from posefix.pipeline.cli import library_defaults, run_stage, stage_parser

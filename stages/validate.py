@@ -9,7 +9,7 @@ a manifest (name, path, format, sha256) of the files read. The workflow runs it 
 so adding or fixing a pose reruns only that pose.
 """
 
-import posefix  # noqa: F401  (runtime defaults before numpy)
+import posefix.pipeline.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; runtime defaults before numpy)
 import numpy as np
 
 from posefix.mesh.geometry import bbox_diagonal

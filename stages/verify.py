@@ -11,7 +11,7 @@ the mesh.
 import json
 from dataclasses import asdict
 
-import posefix  # noqa: F401  (runtime defaults before numpy)
+import posefix.pipeline.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; runtime defaults before numpy)
 
 from posefix.pipeline.artifacts import read_artifact, write_artifact
 from posefix.pipeline.cli import run_stage, stage_parser

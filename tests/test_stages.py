@@ -293,3 +293,19 @@ def test_an_explicit_device_request_is_honoured_or_fails(demo_artifacts, tmp_pat
     errors = [line for line in proc.stderr.splitlines() if "error:" in line]
     assert proc.returncode == 2 and len(errors) == 1 and "--device: gpu requested but no gpu" in errors[0]
     assert not (tmp_path / "i.h5").exists()
+
+
+def test_ctrl_c_during_a_stage_s_imports_exits_quietly_with_130():
+    import ast
+    import sys
+    for stage in STAGES:  # every stage imports the handler before anything but the standard library
+        tree = ast.parse((ROOT / "stages" / f"{stage}.py").read_text())
+        modules = [node.names[0].name if isinstance(node, ast.Import) else node.module for node in tree.body
+                   if isinstance(node, (ast.Import, ast.ImportFrom))]
+        first = next(m for m in modules if m.split(".")[0] not in sys.stdlib_module_names)
+        assert first == "posefix.pipeline.interrupt", stage
+    code = ("import os, runpy, signal, sys; import posefix.pipeline.interrupt; sys.argv = ['render.py', '--help']; "
+            "os.kill(os.getpid(), signal.SIGINT); runpy.run_path(sys.argv[0])")
+    import subprocess
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT / "stages")
+    assert proc.returncode == 130 and proc.stderr == "posefix render: interrupted; no output written\n"

@@ -14,6 +14,7 @@ import argparse
 import inspect
 import logging
 import shlex
+import signal
 import sys
 import time
 
@@ -38,6 +39,7 @@ def stage_parser(stage, description):
 def run_stage(parser, main, argv=None):
     """Parse arguments, set up logging and thread limits, run ``main(args, log)``, map errors."""
     args = parser.parse_args(argv)
+    signal.signal(signal.SIGINT, signal.default_int_handler)  # from here KeyboardInterrupt, handled below
     log = configure_logging(args.stage, args.log)
     start = time.perf_counter()
     try:
