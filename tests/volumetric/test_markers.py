@@ -7,7 +7,7 @@ import pytest
 from conftest import ROOT, run_stage
 from posefix.mesh.rotations import rotation_exp
 from posefix.pipeline.marker_tracks import MarkerTracks, read_tracks, write_tracks_csv
-from posefix.pipeline.meshes import read_mesh
+from posefix.pipeline.meshes import read_mesh, write_mesh
 from posefix.volumetric.markers import MarkerAnimator
 from posefix.volumetric.shapes import tet_grid
 from posefix.volumetric.transfer import boundary_faces
@@ -43,8 +43,9 @@ def test_rigidly_moved_markers_move_the_mesh_rigidly(bar):
     assert errors[0] > errors[1] > errors[2] > 1e-2
 
 
-def test_the_stage_writes_the_same_library_from_csv_and_npz(tmp_path):
-    ref = ROOT / "data" / "demo" / "demo-reference.obj"
+def test_the_stage_writes_the_same_library_from_csv_and_npz(tmp_path, demo):
+    ref = tmp_path / "demo-reference.obj"
+    write_mesh(ref, demo[0], demo[1])  # the demo limb the tracks were made on
     tracks = read_tracks(ROOT / "poses" / "demo-limb-markers.csv")
     np.savez(tmp_path / "demo.npz", tracks=tracks.positions, markers=tracks.markers, frames=tracks.frames)
     for source, name in ((ROOT / "poses" / "demo-limb-markers.csv", "csv"), (tmp_path / "demo.npz", "npz")):
