@@ -102,6 +102,7 @@ rule repair_volumetric:
 rule export_baseline:
     input:
         artifact=f"{RESULTS}/{{pose}}/{{baseline}}.h5",
+        reference=LIBRARY.reference.path,
         target=pose_file,
     output:
         f"{RESULTS}/repaired-{{baseline}}/{{pose}}{{suffix}}",
@@ -119,4 +120,4 @@ rule export_baseline:
         f"{RESULTS}/benchmarks/{{pose}}/export_{{baseline}}{{suffix}}.tsv"
     shell:
         "{params.python:q} {params.script:q} --artifact {input.artifact:q} --stage repair_{wildcards.baseline}"
-        " --target {input.target:q} --out {output:q} --log {log:q}"
+        " --reference {input.reference:q} --target {input.target:q} --out {output:q} --log {log:q}"

@@ -39,6 +39,7 @@ rule verify:
 rule export:
     input:
         verify=rules.verify.output[0],
+        reference=LIBRARY.reference.path,
         target=pose_file,
     output:
         f"{RESULTS}/repaired/{{pose}}{{suffix}}",
@@ -54,5 +55,6 @@ rule export:
     benchmark:
         f"{RESULTS}/benchmarks/{{pose}}/export{{suffix}}.tsv"
     shell:
-        "{params.python:q} {params.script:q} --artifact {input.verify:q} --target {input.target:q}"
+        "{params.python:q} {params.script:q} --artifact {input.verify:q} --reference {input.reference:q}"
+        " --target {input.target:q}"
         " --out {output:q} --log {log:q}"

@@ -53,10 +53,10 @@ def main(args, log):
     if args.ring < 0 or args.contact < 0 or args.contact_radius <= 0:
         raise InputError("arguments", "--ring and --contact must be >= 0, --contact-radius > 0")
     with timings.step("read"):
-        data, _ = read_artifact(args.keyframes, "keyframes", ["frames", "faces", "reference"])
+        data, _ = read_artifact(args.keyframes, "keyframes", ["frames", "faces", "reference", "weld_index"])
     frames, F, V_ref = data["frames"], data["faces"], data["reference"]
     n, K = len(V_ref), len(frames)
-    exclude = _exclusions(args, n)
+    exclude = data["weld_index"][_exclusions(args, len(data["weld_index"]))]  # input vertex ids -> welded
     frame_pairs = []
     with timings.step("intersections"):
         for k, V in enumerate(frames):
@@ -93,7 +93,7 @@ def main(args, log):
 
 
 def _exclusions(args, n):
-    """Hand-picked vertex ids from ``--exclude`` and ``--exclude-file``, range-checked."""
+    """Hand-picked vertex ids (of the input meshes) from ``--exclude`` and ``--exclude-file``, range-checked."""
     ids = np.asarray(args.exclude, dtype=np.int64)
     source = "--exclude"
     if args.exclude_file:

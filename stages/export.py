@@ -11,6 +11,7 @@ import numpy as np
 from posefix.pipeline.artifacts import read_artifact
 from posefix.pipeline.cli import run_stage, stage_parser
 from posefix.pipeline.errors import InputError
+from posefix.pipeline.library import read_welded_reference
 from posefix.pipeline.meshes import read_mesh, write_like
 from posefix.pipeline.timings import Timings
 
@@ -20,6 +21,8 @@ def build_parser():
     parser.add_argument("--artifact", required=True, help="verify.h5 (S0) or a baseline's artifact of the pose")
     parser.add_argument("--stage", default="verify", choices=("verify", "repair_medial", "repair_volumetric"),
                         help="the stage that wrote --artifact: its dataset 'repaired' is written")
+    parser.add_argument("--reference", required=True,
+                        help="the reference mesh file (its seams: vertices split there get one position again)")
     parser.add_argument("--target", required=True, help="the target mesh file (its format is reproduced)")
     parser.add_argument("--out", required=True, help="repaired mesh file (same extension as --target)")
     return parser
@@ -30,7 +33,10 @@ def main(args, log):
     with timings.step("read"):
         data, _ = read_artifact(args.artifact, args.stage, ["repaired"])
         V_tgt, F = read_mesh(args.target)
-    X = data["repaired"]
+        _, _, weld = read_welded_reference(args.reference)
+    if len(data["repaired"]) != len(weld.kept):
+        raise InputError(args.artifact, f"{len(data['repaired'])} vertices, the welded reference has {len(weld.kept)}")
+    X = weld.unweld(data["repaired"])
     if X.shape != V_tgt.shape:
         raise InputError(args.target, f"{len(V_tgt)} vertices, the repaired pose has {len(X)}")
     with timings.step("write"):

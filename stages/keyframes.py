@@ -14,7 +14,7 @@ import numpy as np
 from posefix.mesh.geometry import bbox_diagonal
 from posefix.pipeline.artifacts import write_artifact
 from posefix.pipeline.cli import library_defaults, run_stage, stage_parser
-from posefix.pipeline.library import read_pose_pair
+from posefix.pipeline.library import read_welded_pair
 from posefix.pipeline.timings import Timings
 from posefix.spacetime import keyframes as kf
 
@@ -24,6 +24,8 @@ DOCS = {
     "faces": ("index", "triangle vertex indices, (m, 3) int64"),
     "reference": ("length", "reference vertex positions, (n, 3) float64"),
     "target": ("length", "target vertex positions, (n, 3) float64"),
+    "weld_index": ("index", "vertex (of the n) of every input vertex: n is less than the input's vertex count when the "
+                            "reference has vertices split along seams, which are welded (N,) int64"),
     "rotation_angle": ("rad", "per-face rotation angle reference -> aligned target after unwrapping, (m,) float64"),
     "branch_turns": ("1", "per-face number of full turns added by the branch unwrapping, (m,) int64"),
     "global_rotation": ("rad", "rotation vector of the removed global rigid rotation, (3,) float64"),
@@ -54,7 +56,10 @@ def build_parser():
 def main(args, log):
     timings = Timings()
     with timings.step("read"):
-        V_ref, V_tgt, F = read_pose_pair(args.reference, args.target)
+        V_ref, V_tgt, F, weld = read_welded_pair(args.reference, args.target)
+    if weld.split:
+        log.info("%d vertices split along seams in the reference: welded to %d for the computation",
+                 len(weld.index), len(weld.kept))
     d = bbox_diagonal(V_ref)
     log.info("%s -> %s: %d vertices, %d faces, K = %d", Path(args.reference).name, Path(args.target).name,
              len(V_ref), len(F), args.count)
@@ -72,11 +77,12 @@ def main(args, log):
     log.info("endpoint error / bbox diagonal: reference %.1e, target %.1e", err0, err1)
     write_artifact(
         args.out, "keyframes",
-        {"t": t, "frames": frames, "faces": F, "reference": V_ref, "target": V_tgt,
+        {"t": t, "frames": frames, "faces": F, "reference": V_ref, "target": V_tgt, "weld_index": weld.index,
          "rotation_angle": angle, "branch_turns": interp.turns, "global_rotation": interp.global_omega},
         params={"count": args.count, "align": args.align, "unwrap": args.unwrap},
         inputs=[args.reference, args.target], timings=timings,
-        metrics={"vertices": len(V_ref), "faces": len(F), "keyframes": args.count, "bbox_diagonal": d,
+        metrics={"vertices": len(V_ref), "input_vertices": len(weld.index), "faces": len(F),
+                 "keyframes": args.count, "bbox_diagonal": d,
                  "endpoint_error_reference": err0, "endpoint_error_target": err1,
                  "unwrapped_faces": int(np.count_nonzero(interp.turns)),
                  "global_rotation_deg": float(np.degrees(np.linalg.norm(interp.global_omega)))},

@@ -11,7 +11,7 @@ from posefix.mesh.geometry import bbox_diagonal
 from posefix.pipeline.artifacts import read_artifact, write_artifact
 from posefix.pipeline.cli import library_defaults, run_stage, stage_parser
 from posefix.pipeline.errors import InputError
-from posefix.pipeline.library import read_pose_pair
+from posefix.pipeline.library import read_welded_pair
 from posefix.pipeline.timings import Timings
 from posefix.skeletal.repair import MedialRepair
 
@@ -50,7 +50,7 @@ def main(args, log):
         raise InputError("arguments", "need --margin >= 0, --tau > 0, --neighbours >= 1, --max-reach >= 1, "
                                       "--max-iters >= 0")
     with timings.step("read"):
-        V, X, F = read_pose_pair(args.reference, args.target)
+        V, X, F, _ = read_welded_pair(args.reference, args.target)
         skeleton, _ = read_artifact(args.skeleton, "skeleton", ["S"])
     if skeleton["S"].shape != V.shape:
         raise InputError(args.skeleton, f"{len(skeleton['S'])} centres for a reference of {len(V)} vertices")

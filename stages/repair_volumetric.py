@@ -11,7 +11,7 @@ import posefix.pipeline.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; r
 from posefix.pipeline.artifacts import read_artifact, write_artifact
 from posefix.pipeline.cli import library_defaults, run_stage, stage_parser
 from posefix.pipeline.errors import InputError
-from posefix.pipeline.library import read_pose_pair
+from posefix.pipeline.library import read_welded_pair
 from posefix.pipeline.timings import Timings
 from posefix.volumetric.fill import VolumetricFill
 
@@ -49,7 +49,7 @@ def main(args, log):
         raise InputError("arguments", "need --iterations >= 0, --point-weight > 0, --max-rings >= 0, "
                                       "0 < --max-free <= 1")
     with timings.step("read"):
-        V, X, F = read_pose_pair(args.reference, args.target)
+        V, X, F, _ = read_welded_pair(args.reference, args.target)
         mask = read_artifact(args.classify, "classify", ["mask"])[0]["mask"].astype(bool)
         tets, _ = read_artifact(args.tets, "tet_mesh", ["X", "T"])
     if mask.shape != (len(V),):

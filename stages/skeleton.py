@@ -10,7 +10,7 @@ import numpy as np
 
 from posefix.pipeline.artifacts import write_artifact
 from posefix.pipeline.cli import run_stage, stage_parser
-from posefix.pipeline.library import read_reference
+from posefix.pipeline.library import read_welded_reference
 from posefix.pipeline.skeletons import add_skeleton_options, reference_skeleton
 from posefix.pipeline.timings import Timings
 
@@ -33,7 +33,7 @@ def build_parser():
 def main(args, log):
     timings = Timings()
     with timings.step("read"):
-        V, F = read_reference(args.reference)
+        V, F, _ = read_welded_reference(args.reference)
     with timings.step("skeleton"):
         skeleton = reference_skeleton(args.reference, V, F, args)
     log.info("skeletal mesh of %d vertices: %d bad centres", len(V), int(skeleton.bad.sum()))

@@ -10,7 +10,7 @@ import posefix.pipeline.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; r
 from posefix.pipeline.artifacts import write_artifact
 from posefix.pipeline.cli import library_defaults, run_stage, stage_parser
 from posefix.pipeline.errors import InputError
-from posefix.pipeline.library import read_reference
+from posefix.pipeline.library import read_welded_reference
 from posefix.pipeline.timings import Timings
 from posefix.volumetric.tet_mesh import tet_mesh
 
@@ -34,7 +34,7 @@ def main(args, log):
     if args.tet_vertices < 4:
         raise InputError("arguments", "need --tet-vertices >= 4")
     with timings.step("read"):
-        V, F = read_reference(args.reference)
+        V, F, _ = read_welded_reference(args.reference)
     with timings.step("tets"):
         X, T = tet_mesh(V, F, args.tet_vertices)
     log.info("%s: %d vertices; tet mesh of %d vertices, %d tets", args.reference, len(V), len(X), len(T))

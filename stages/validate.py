@@ -16,7 +16,8 @@ from posefix.mesh.geometry import bbox_diagonal
 from posefix.pipeline.artifacts import write_artifact
 from posefix.pipeline.cli import run_stage, stage_parser
 from posefix.pipeline.files import file_sha256
-from posefix.pipeline.library import discover_library, read_pose, read_reference
+from posefix.mesh.weld import Weld
+from posefix.pipeline.library import check_seams, discover_library, read_pose, read_reference
 from posefix.pipeline.timings import Timings
 
 DOCS = {
@@ -47,9 +48,13 @@ def main(args, log):
     log.info("library %s: reference %s, %d poses", library.name, library.reference.name, len(library.poses))
     with timings.step("read"):
         V_ref, F = read_reference(library.reference.path)
+        weld = Weld.of(V_ref, F)
+        if weld.split:
+            log.info("reference: %d vertices split along seams (welded for the repair, split again on output)",
+                     len(weld.index) - len(weld.kept))
         checked = () if args.reference_only else library.poses
         for i, pose in enumerate(checked, 1):
-            read_pose(pose.path, V_ref, F)
+            check_seams(pose.path, weld, read_pose(pose.path, V_ref, F), V_ref, F)
             log.info("pose %d/%d %s: ok", i, len(checked), pose.name)
     files = (library.reference,) + checked
     with timings.step("hash"):
@@ -64,7 +69,8 @@ def main(args, log):
         params={"library": args.library, "reference": args.reference, "poses": poses, "name": library.name,
                 "reference_only": args.reference_only},
         inputs=[f.path for f in files], timings=timings,
-        metrics={"vertices": len(V_ref), "faces": len(F), "poses": len(checked),
+        metrics={"vertices": len(V_ref), "split_vertices": len(weld.index) - len(weld.kept), "faces": len(F),
+                 "poses": len(checked),
                  "bbox_diagonal": bbox_diagonal(V_ref)},
         docs=DOCS)
 

@@ -130,3 +130,44 @@ def test_a_config_mistake_is_one_line_naming_the_key(checkout, tmp_path, setting
     proc = run(checkout, tmp_path, "-n", "--config", setting)
     assert proc.returncode != 0 and line in proc.stderr.splitlines()
     assert len(proc.stderr.splitlines()) < 10 and not (tmp_path / "results").exists()
+
+
+def split_along_a_seam(V, F):
+    """Vertices used by faces on both sides of the plane x = 0 are split (a copy appended, used by the faces
+    with x < 0), as an exporter does along a UV seam: (V', F', originals, copies)."""
+    left = V[F].mean(axis=1)[:, 0] < 0
+    shared = np.intersect1d(F[left], F[~left])
+    copies = len(V) + np.arange(len(shared))
+    remap = np.arange(len(V))
+    remap[shared] = copies
+    F2 = F.copy()
+    F2[left] = remap[F[left]]
+    return F2, shared, copies
+
+
+def test_a_library_split_along_a_seam_is_repaired_welded_and_split_again(checkout, tmp_path, demo, demo_run):
+    from posefix.pipeline.meshes import read_mesh
+    V, F, poses = demo
+    F2, shared, copies = split_along_a_seam(V, F)
+    library = tmp_path / "seams"
+    for name, X in (("demo-reference", V), ("demo-01", poses["demo-01"])):
+        write_mesh(library / f"{name}.obj", np.vstack([X, X[shared]]), F2)
+    proc = run(checkout, tmp_path, "--config", f"library={library}", "baselines=[]")
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    out, F_out = read_mesh(tmp_path / "results" / "seams" / "repaired" / "demo-01.obj")
+    assert np.array_equal(F_out, F2) and len(out) == len(V) + len(shared)
+    assert np.array_equal(out[copies], out[shared])  # the seam stays closed, bit for bit
+    # welded, the computation is the unsplit demo's: the same repaired pose, the same fit
+    welded, _ = read_mesh(demo_run / "results" / "demo" / "repaired" / "demo-01.obj")
+    assert np.array_equal(out[: len(V)], welded)
+    import h5py
+    with h5py.File(tmp_path / "results" / "seams" / "demo-01" / "fit.h5", "r") as a, \
+            h5py.File(demo_run / "results" / "demo" / "demo-01" / "fit.h5", "r") as b:
+        assert np.array_equal(a["history/condition"][()], b["history/condition"][()])
+    opened = np.vstack([poses["demo-02"], poses["demo-02"][shared]])
+    opened[copies[5]] += [0.0, 0.0, 0.1]  # the seam opens in this pose
+    write_mesh(library / "demo-02.obj", opened, F2)
+    proc = run(checkout, tmp_path, "--config", f"library={library}", "baselines=[]", "poses=demo-02")
+    errors = [line for line in proc.stderr.splitlines() if line.startswith("posefix validate: error:")]
+    assert proc.returncode != 0 and len(errors) == 1
+    assert f"demo-02.obj: vertices {shared[5]} and {copies[5]} coincide in the reference (a seam)" in errors[0]

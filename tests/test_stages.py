@@ -217,7 +217,8 @@ def test_classify_rejects_a_wrong_artifact(demo_artifacts, tmp_path):
 
 def test_export_reproduces_the_target_file_but_the_vertex_lines(demo_artifacts, tmp_path):
     target = demo_artifacts / "lib" / "demo-01.obj"
-    run_stage("export", "--artifact", demo_artifacts / "verify.h5", "--target", target, "--out", tmp_path / "r.obj")
+    run_stage("export", "--artifact", demo_artifacts / "verify.h5", "--reference", demo_artifacts / "lib" /
+              "demo-reference.obj", "--target", target, "--out", tmp_path / "r.obj")
     with h5py.File(demo_artifacts / "verify.h5", "r") as fh:
         X = fh["repaired"][()]
     ours, theirs = (tmp_path / "r.obj").read_text().splitlines(), target.read_text().splitlines()
@@ -232,7 +233,8 @@ def test_export_refuses_a_target_of_another_size(demo_artifacts, tmp_path):
     from posefix.pipeline.meshes import write_mesh
     V, F = icosphere(1)
     write_mesh(tmp_path / "ball.obj", V, F)
-    proc = run_stage("export", "--artifact", demo_artifacts / "verify.h5", "--target", tmp_path / "ball.obj",
+    proc = run_stage("export", "--artifact", demo_artifacts / "verify.h5", "--reference",
+                     demo_artifacts / "lib" / "demo-reference.obj", "--target", tmp_path / "ball.obj",
                      "--out", tmp_path / "r.obj", check=False)
     assert proc.returncode == 2 and "ball.obj" in proc.stderr and "Traceback" not in proc.stderr
     assert not (tmp_path / "r.obj").exists()

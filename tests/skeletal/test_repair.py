@@ -104,7 +104,7 @@ def test_the_stages_repair_a_demo_pose_and_refuse_a_foreign_one(tmp_path):
         assert np.array_equal(fh["start"][()], read_mesh(tmp_path / "bent.obj")[0])
         X = fh["repaired"][()]
     run_stage("export", "--artifact", tmp_path / "medial.h5", "--stage", "repair_medial",
-              "--target", tmp_path / "bent.obj", "--out", tmp_path / "out.obj")
+              "--reference", tmp_path / "ref.obj", "--target", tmp_path / "bent.obj", "--out", tmp_path / "out.obj")
     V_out, F_out = read_mesh(tmp_path / "out.obj")
     assert np.array_equal(V_out, X) and np.array_equal(F_out, F)
     write_mesh(tmp_path / "other.obj", V[:-1], F[:10])

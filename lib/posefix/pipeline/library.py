@@ -12,12 +12,16 @@ from pathlib import Path
 
 import numpy as np
 
-from posefix.mesh.geometry import bbox_diagonal, face_areas
+from posefix.mesh.geometry import bbox_diagonal, edge_lengths, face_areas
+from posefix.mesh.topology import edges
+from posefix.mesh.weld import Weld
 from posefix.pipeline.errors import InputError
 from posefix.pipeline.meshes import MESH_SUFFIXES, MeshFile, mesh_file, read_mesh
 from posefix.spacetime.rbf import POLY_TERMS
 
 DEGENERATE_AREA_REL = 1e-14
+SEAM_APART_REL = 1e-3
+"""Vertices split along a seam in the reference must stay within this times its mean edge length in a pose."""
 """Reference faces with area below this times the squared bbox diagonal count as zero-area."""
 
 
@@ -161,6 +165,34 @@ def read_pose_pair(reference_path, target_path):
     """
     V_ref, F = read_reference(reference_path)
     return V_ref, read_pose(target_path, V_ref, F), F
+
+
+def check_seams(path, weld, X, V_ref, F):
+    """Raise :class:`InputError` when vertices that coincide in the reference (``weld``) are apart in the
+    pose ``X`` (n, 3): the pose splits the mesh where the reference does not."""
+    tol = SEAM_APART_REL * float(edge_lengths(V_ref, edges(F)).mean())
+    apart = weld.apart(X, tol)
+    if len(apart):
+        a, b = apart[0]
+        raise InputError(path, f"vertices {a} and {b} coincide in the reference (a seam) but are "
+                               f"{np.linalg.norm(X[a] - X[b]):.3g} apart here ({len(apart)} such vertices)")
+
+
+def read_welded_reference(path):
+    """The reference with its split vertices welded (:class:`~posefix.mesh.weld.Weld`): (V (k, 3), F (m, 3),
+    weld); a mesh without seams comes back unchanged (``k == n``)."""
+    V, F = read_reference(path)
+    weld = Weld.of(V, F)
+    return weld.weld(V), weld.faces(F), weld
+
+
+def read_welded_pair(reference_path, target_path):
+    """Reference and target with the reference's split vertices welded: (V_ref (k, 3), V_tgt (k, 3),
+    F (m, 3), weld); :class:`InputError` naming the target when a seam of the reference opens in it."""
+    V_ref, V_tgt, F = read_pose_pair(reference_path, target_path)
+    weld = Weld.of(V_ref, F)
+    check_seams(target_path, weld, V_tgt, V_ref, F)
+    return weld.weld(V_ref), weld.weld(V_tgt), weld.faces(F), weld
 
 
 def read_vertex_ids(path):
