@@ -86,17 +86,29 @@ def test_adding_a_pose_plans_only_that_pose_and_a_code_change_only_what_it_chang
     assert jobs["verify"] == 4
 
 
-def test_a_bad_pose_fails_alone_with_one_line_and_the_others_are_repaired(checkout, tmp_path):
+def digests(folder):
+    """sha256 of every file below ``folder`` (logs and Snakemake's benchmark files aside)."""
+    import hashlib
+    return {p.relative_to(folder): hashlib.sha256(p.read_bytes()).hexdigest() for p in sorted(folder.rglob("*"))
+            if p.is_file() and not {"logs", "benchmarks"} & set(p.relative_to(folder).parts)}
+
+
+def test_a_bad_pose_fails_alone_with_one_line_and_earlier_results_stay(checkout, tmp_path):
     library = balls(tmp_path / "lib", ["ball-01"])
+    assert run(checkout, tmp_path, "--config", f"library={library}").returncode == 0
+    results = tmp_path / "results" / "lib"
+    before = digests(results)
     V, F = icosphere(2)
     write_mesh(library / "ball-02.ply", np.vstack([V, [[9.0, 9.0, 9.0]]]), F)  # one vertex too many
+    write_mesh(library / "ball-03.obj", V * SHAPES["ball-03"], F)
     proc = run(checkout, tmp_path, "--config", f"library={library}")
     assert proc.returncode != 0
     errors = [line for line in proc.stderr.splitlines() if line.startswith("posefix validate: error:")]
     assert len(errors) == 1 and "ball-02.ply" in errors[0] and "vertices" in errors[0]
     assert "Traceback" not in proc.stderr
-    results = tmp_path / "results" / "lib"
-    assert (results / "repaired" / "ball-01.obj").exists() and not list(results.glob("ball-02/*.h5"))
+    assert (results / "repaired" / "ball-03.obj").exists() and not list(results.glob("ball-02/*.h5"))
+    after = digests(results)
+    assert all(after[name] == digest for name, digest in before.items())  # nothing earlier rewritten
 
 
 def test_a_run_killed_during_the_fit_finishes_with_the_same_command(checkout, tmp_path):
