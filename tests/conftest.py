@@ -29,6 +29,20 @@ def icosphere(subdivisions=2, radius=1.0, centre=(0.0, 0.0, 0.0)):
     return np.asarray(m.vertices) + np.asarray(centre), np.asarray(m.faces, dtype=np.int64)
 
 
+def split_along_a_seam(V, F):
+    """Split the vertices used by faces on both sides of the plane x = 0 (a copy appended, used by the faces
+    with x < 0), as an exporter does along a UV seam: (faces (m, 3) on the n + s vertices ``V ++ V[originals]``,
+    originals (s,), copies (s,))."""
+    left = V[F].mean(axis=1)[:, 0] < 0
+    shared = np.intersect1d(F[left], F[~left])
+    copies = len(V) + np.arange(len(shared))
+    remap = np.arange(len(V))
+    remap[shared] = copies
+    F2 = F.copy()
+    F2[left] = remap[F[left]]
+    return F2, shared, copies
+
+
 def grid_sheet(n, z):
     """An n x n grid of the unit square at height z: (n*n, 3) float vertices, (2(n-1)^2, 3) int64 faces."""
     g = np.linspace(0, 1, n)

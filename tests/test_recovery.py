@@ -14,7 +14,7 @@ import time
 import numpy as np
 import pytest
 
-from conftest import ROOT, icosphere, with_quick_downstream
+from conftest import ROOT, icosphere, split_along_a_seam, with_quick_downstream
 from posefix.pipeline.meshes import write_mesh
 
 pytestmark = pytest.mark.pipeline
@@ -142,19 +142,6 @@ def test_a_config_mistake_is_one_line_naming_the_key(checkout, tmp_path, setting
     proc = run(checkout, tmp_path, "-n", "--config", setting)
     assert proc.returncode != 0 and line in proc.stderr.splitlines()
     assert len(proc.stderr.splitlines()) < 10 and not (tmp_path / "results").exists()
-
-
-def split_along_a_seam(V, F):
-    """Vertices used by faces on both sides of the plane x = 0 are split (a copy appended, used by the faces
-    with x < 0), as an exporter does along a UV seam: (V', F', originals, copies)."""
-    left = V[F].mean(axis=1)[:, 0] < 0
-    shared = np.intersect1d(F[left], F[~left])
-    copies = len(V) + np.arange(len(shared))
-    remap = np.arange(len(V))
-    remap[shared] = copies
-    F2 = F.copy()
-    F2[left] = remap[F[left]]
-    return F2, shared, copies
 
 
 def test_a_library_split_along_a_seam_is_repaired_welded_and_split_again(checkout, tmp_path, demo, demo_run):

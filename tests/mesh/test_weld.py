@@ -2,20 +2,13 @@
 
 import numpy as np
 
-from conftest import icosphere
+from conftest import icosphere, split_along_a_seam
 from posefix.mesh.weld import Weld, seam_groups
 
 
 def cut(V, F):
-    """The sphere cut along the faces' x < 0 half: every vertex there used by faces of both halves is split
-    (a copy appended), as an exporter does along a UV seam."""
-    left = V[F].mean(axis=1)[:, 0] < 0
-    shared = np.intersect1d(F[left], F[~left])
-    copies = len(V) + np.arange(len(shared))
-    remap = np.arange(len(V))
-    remap[shared] = copies
-    F2 = F.copy()
-    F2[left] = remap[F[left]]
+    """The sphere split along a seam: (V', F', originals, copies)."""
+    F2, shared, copies = split_along_a_seam(V, F)
     return np.vstack([V, V[shared]]), F2, shared, copies
 
 
