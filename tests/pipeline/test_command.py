@@ -38,6 +38,10 @@ def test_posefix_repair_from_another_folder_matches_the_workflow_run(demo_run, t
     name = "results/demo/repaired/demo-01.obj"
     assert (tmp_path / name).read_bytes() == (demo_run / name).read_bytes()
     assert list((tmp_path / "posefix-logs").glob("repair-*.log"))
+    proc = posefix("report", demo_run / "data" / "demo", "--config", QUICK_DOWNSTREAM, "poses=demo-01",
+                   cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    assert (tmp_path / "reports" / "demo" / "report.html").stat().st_size > 100_000
 
 
 @pytest.mark.pipeline
