@@ -61,6 +61,7 @@ rule tet_mesh:
     output:
         f"{RESULTS}/tets.h5",
     params:
+        tet_vertices=FILL["tet_vertices"],
         python=PYTHON,
         script=stage_script("tet_mesh"),
         code=stage_code("tet_mesh"),
@@ -71,7 +72,7 @@ rule tet_mesh:
         f"{RESULTS}/benchmarks/tet_mesh.tsv"
     shell:
         "{params.python:q} {params.script:q} --reference {input.reference:q} --out {output:q}"
-        " --tet-vertices {FILL[tet_vertices]} --threads {threads} --log {log:q}"
+        " --tet-vertices {params.tet_vertices} --threads {threads} --log {log:q}"
 
 
 rule repair_volumetric:

@@ -27,7 +27,7 @@ rule validate_reference:
     output:
         f"{RESULTS}/reference.h5",
     params:
-        folder=LIBRARY.folder,
+        folder=lambda wildcards, input: os.path.dirname(input[0]),
         reference=LIBRARY.reference.name,
         name=LIBRARY.name,
         python=PYTHON,
@@ -51,7 +51,7 @@ rule validate:
     output:
         f"{RESULTS}/{{pose}}/validate.h5",
     params:
-        folder=LIBRARY.folder,
+        folder=lambda wildcards, input: os.path.dirname(input[0]),
         reference=LIBRARY.reference.name,
         name=LIBRARY.name,
         python=PYTHON,
