@@ -156,7 +156,7 @@ def fit_options(wildcards):
     c = config["fit"]
     return (f"--eps-rel {c['eps_rel']} --eps-rms-rel {c['eps_rms_rel']} --max-centers {c['max_centers']}"
             f" --candidates {c['candidates']} --batch {c['batch']} --selection {c['selection']}"
-            f" --update {c['update']} --memory-gb {c['memory_gb']}")
+            f" --update {c['update']} --memory-gb {c['memory_gb']} --device {c['device']}")
 
 
 def repaired_file(pose):

@@ -91,14 +91,15 @@ rule fit:
         code=stage_code("fit"),
     threads: config["fit"]["threads"]
     resources:
-        mem_mb=int(1000 * config["fit"]["memory_gb"]) + 1000,
+        mem_mb=int(1000 * config["fit"]["memory_gb"]) + 2000,
     log:
         f"{RESULTS}/logs/{{pose}}/fit.log",
     benchmark:
         f"{RESULTS}/benchmarks/{{pose}}/fit.tsv"
     shell:
         "{params.python:q} {params.script:q} --constraints {input:q} {params.options}"
-        " --checkpoint {params.checkpoint:q} --threads {threads} --out {output:q} --log {log:q}"
+        " --checkpoint {params.checkpoint:q} --threads {threads} --mem-mb {resources.mem_mb}"
+        " --out {output:q} --log {log:q}"
 
 
 rule integrate:

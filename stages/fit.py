@@ -20,7 +20,8 @@ from posefix.pipeline.errors import InputError
 from posefix.pipeline.files import file_sha256
 from posefix.pipeline.timings import Timings
 from posefix.spacetime.factorization import FactorizationError
-from posefix.spacetime.fit import FitSettings, iterate
+from posefix.pipeline.resources import cache_budget, opencl_device
+from posefix.spacetime.fit import FitSettings, cache_fits, fit_memory, iterate
 
 DOCS = {
     "centers": ("length", "RBF centres gamma_j in space-time, (n, 4) float64"),
@@ -72,7 +73,11 @@ def build_parser():
     parser.add_argument("--update", choices=("blocked", "full"), default=defaults["update"],
                         help="blocked Cholesky updates or full LU refactorization every iteration")
     parser.add_argument("--memory-gb", type=float, default=defaults["memory_bytes"] / 1e9,
-                        help="budget of the kernel cache")
+                        help="budget of the kernel cache (GB); lowered to what --mem-mb and the machine allow")
+    parser.add_argument("--mem-mb", type=float, default=None, help="the job's memory (MB; the rule's resources)")
+    parser.add_argument("--device", choices=("auto", "cpu", "gpu", "numpy"), default="auto",
+                        help="where the residual is recomputed when the kernel cache does not fit: an OpenCL device "
+                             "(cpu, gpu: that one or an error; auto: a GPU, else a CPU, else numpy) or numpy")
     return parser
 
 
@@ -83,18 +88,21 @@ def main(args, log):
     with timings.step("read"):
         data, attrs = read_artifact(args.constraints, "constraints", ["points", "values"])
     d = float(attrs["metrics"]["bbox_diagonal"])
+    points, values = data["points"], data["values"]
+    budget = cache_budget(args.memory_gb * 1e9, args.mem_mb, fit_memory(len(points), args.max_centers))
     settings = FitSettings(eps=args.eps_rel * d, eps_rms=args.eps_rms_rel * d, max_centers=args.max_centers,
                            candidates=args.candidates, batch=args.batch, selection=args.selection,
-                           update=args.update, memory_bytes=args.memory_gb * 1e9)
+                           update=args.update, memory_bytes=budget)
+    device, device_name = (None, "none needed") if cache_fits(len(points), settings) else \
+        opencl_device(args.device, args.threads)
     folder = Path(args.checkpoint or Path(args.out).with_suffix(".checkpoint"))
     key = config_hash({"constraints": file_sha256(args.constraints), **settings.selection_key()})
-    points, values = data["points"], data["values"]
     log.info("%d constraints; eps = %.3g (%.3g d), max %d centres, %s selection, %s update",
              len(points), settings.eps, args.eps_rel, args.max_centers, args.selection, args.update)
     with checkpoint.locked(folder):
         with timings.step("start"):
             try:
-                fit, resumed = checkpoint.start_or_resume(points, values, settings, folder, key)
+                fit, resumed = checkpoint.start_or_resume(points, values, settings, folder, key, device)
             except FactorizationError as exc:
                 raise InputError(args.constraints, str(exc)) from None
         with timings.step("iterate"):
@@ -111,9 +119,11 @@ def main(args, log):
         args.out, "fit",
         {"centers": points[fit.order], "center_index": fit.order, "weights": fit.weights, "poly": fit.poly,
          "shift": fit.shift, "scale": np.float64(fit.scale), "residual": fit.residual, **history, **factors},
-        params=_settings_dict(settings) | {"eps_rel": args.eps_rel, "eps_rms_rel": args.eps_rms_rel},
+        params=_settings_dict(settings) | {"eps_rel": args.eps_rel, "eps_rms_rel": args.eps_rms_rel,
+                                           "device": args.device},
         inputs=[args.constraints], timings=timings,
         metrics={"centers": fit.n, "iterations": len(fit.history), "stop_reason": reason,
+                 "evaluation": fit.evaluator.mode, "device": device_name,
                  "max_error_rel": last["max_error"] / d, "rms_error_rel": last["rms_error"] / d,
                  "max_condition": max(r["condition"] for r in fit.history), "bbox_diagonal": d,
                  "resumed_iterations": resumed,

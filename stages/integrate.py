@@ -6,14 +6,13 @@ steps, on an OpenCL device (one work-item per vertex, float64) or, when none is 
 Steps land on the constraint sample times t_i = i/s, where positions are recorded.
 """
 
-import os
-
 import posefix.pipeline.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; runtime defaults before numpy)
 import numpy as np
 
 from posefix.pipeline.artifacts import read_artifact, write_artifact
 from posefix.pipeline.cli import library_defaults, run_stage, stage_parser
 from posefix.pipeline.errors import InputError
+from posefix.pipeline.resources import opencl_device
 from posefix.pipeline.timings import Timings
 from posefix.spacetime.integration import field_velocity, rk45
 from posefix.spacetime.rbf import RBFField
@@ -48,7 +47,6 @@ def build_parser():
 def main(args, log):
     if args.rtol <= 0 or args.atol_rel <= 0 or not 0 < args.h0 <= 1:
         raise InputError("arguments", "--rtol and --atol-rel must be > 0 and --h0 in (0, 1]")
-    os.environ.setdefault("POCL_MAX_PTHREAD_COUNT", str(max(1, args.threads)))  # before the OpenCL runtime starts
     timings = Timings()
     with timings.step("read"):
         fit, _ = read_artifact(args.fit, "fit", ["centers", "weights", "poly", "shift", "scale"])
@@ -59,16 +57,8 @@ def main(args, log):
     tau, d, s = float(metrics["tau"]), float(metrics["bbox_diagonal"]), int(metrics["samples"])
     times = np.arange(s + 1) / s
     X0 = kf["reference"]
-    backend, device_name, device = "numpy", "numpy (CPU)", None
-    if args.device != "numpy":
-        from posefix.spacetime.integration_opencl import select_device
-        device, text = select_device(args.device)
-        if device is None and args.device != "auto":  # an explicit request is honoured or fails
-            raise InputError("--device", f"{args.device} requested but {text} (use auto to fall back to numpy)")
-        if device is None:
-            log.warning("WARNING: %s; integrating with the numpy backend instead (slower)", text)
-        else:
-            backend, device_name = "opencl", text
+    device, device_name = opencl_device(args.device, args.threads)
+    backend = "numpy" if device is None else "opencl"
     log.info("integrating %d vertices through %d centres on %s (rtol %.1e, atol %.1e d)", len(X0), len(field.weights),
              device_name, args.rtol, args.atol_rel)
     with timings.step("integrate"):

@@ -1,11 +1,13 @@
-"""The OpenCL RK45 kernel: the same integration as numpy, and its hand-written log."""
+"""The OpenCL kernels: RK45 and field values agree with numpy; the hand-written log is accurate."""
 
 import numpy as np
 import pytest
 
+from conftest import smooth_field_problem
 from posefix.spacetime.fit import FitSettings, iterate, start_fit
 from posefix.spacetime.integration import field_velocity, rk45
-from posefix.spacetime.integration_opencl import KERNEL, rk45_opencl, select_device
+from posefix.spacetime.integration_opencl import KERNEL, FieldEvaluator, rk45_opencl, select_device
+from posefix.spacetime.rbf import kernel_matrix, poly_basis
 
 
 def _device():
@@ -65,3 +67,32 @@ def test_opencl_fast_log_is_accurate():
     rel = np.abs(y - exact) / np.maximum(np.abs(exact), 1e-300)
     big = np.abs(exact) > 1e-3  # relative error of log near 1 is measured absolutely below
     assert rel[big].max() <= 1e-15 and np.abs(y - exact)[~big].max() <= 1e-17
+
+
+@pytest.mark.parametrize("vec", [None, 4])
+def test_field_values_agree_with_numpy(vec):
+    device = _device()
+    rng = np.random.default_rng(4)
+    Z = rng.uniform(-1.5, 1.5, size=(3001, 4))   # not a multiple of any work-group or vector width
+    C, w, p = Z[rng.choice(3001, 333, replace=False)], rng.normal(size=(333, 3)), rng.normal(size=(15, 3))
+    expected = kernel_matrix(Z, C) @ w + poly_basis(Z) @ p
+    evaluator = FieldEvaluator(device, Z, vec=vec)
+    got = evaluator(C, w, p)
+    assert np.abs(got - expected).max() <= 1e-10 * np.abs(expected).max()
+    assert np.array_equal(evaluator(C[:20], w[:20], p), evaluator(C[:20], w[:20], p))  # deterministic, reusable
+
+
+def test_fit_without_the_cache_matches_the_cached_fit():
+    """The residual recomputed on the device (or in numpy) selects the same centres as the cached one."""
+    device = _device()
+    Y, V = smooth_field_problem()
+    settings = dict(eps=0.0, max_centers=400, batch=64, candidates=256)
+    fits = {}
+    for name, budget, dev in (("cached", 8e9, None), ("opencl", 0.0, device), ("numpy", 0.0, None)):
+        fits[name] = start_fit(Y, V, FitSettings(**settings, memory_bytes=budget), dev)
+        iterate(fits[name])
+        assert fits[name].evaluator.mode == name
+    scale = np.abs(fits["cached"].residual).max()
+    for name in ("opencl", "numpy"):
+        assert np.array_equal(fits[name].order, fits["cached"].order)
+        assert np.abs(fits[name].residual - fits["cached"].residual).max() <= 1e-10 * scale

@@ -55,12 +55,12 @@ def locked(folder):
             fcntl.flock(handle, fcntl.LOCK_UN)
 
 
-def start_or_resume(points, values, settings, folder, key):
+def start_or_resume(points, values, settings, folder, key, device=None):
     """A fit continuing the checkpoint in ``folder`` where that is exact, else a fresh one.
 
     Parameters
     ----------
-    points, values, settings
+    points, values, settings, device
         As in :func:`posefix.spacetime.fit.start_fit`.
     folder : str or Path
     key : str
@@ -75,10 +75,10 @@ def start_or_resume(points, values, settings, folder, key):
     stored, history = load(folder, key)
     keep = truncate_history(history, settings) if stored is not None else 0
     if not keep:
-        return start_fit(points, values, settings), 0
+        return start_fit(points, values, settings, device), 0
     log.info("resuming from checkpoint %s: %d of %d stored iterations (%d centres)", folder, keep, len(history),
              history[keep - 1]["centers"])
-    return resume_fit(points, values, settings, stored, history[:keep]), keep
+    return resume_fit(points, values, settings, stored, history[:keep], device), keep
 
 
 def committer(folder, key, settings, fit, resumed):

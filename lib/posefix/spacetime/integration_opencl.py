@@ -1,12 +1,16 @@
-"""OpenCL backend of the space-time integration (one work-item per vertex, float64).
+"""OpenCL backend of the space-time field: RK45 integration and values at many points (float64).
 
-The kernel runs the whole Dormand-Prince 5(4) integration of a vertex, with the same step-size
+``rk45`` (one work-item per vertex) runs the whole Dormand-Prince 5(4) integration of a vertex, with the same step-size
 control and sample-time landing as :func:`posefix.spacetime.integration.rk45`. The RBF sum is vectorized
 over the centres (``VEC`` at a time, structure-of-arrays layout, ``doubleN`` arithmetic), so it
 needs no cooperation between work-items: no barriers, no local memory. (A first version streamed
 centres through local memory with work-groups in lockstep; PoCL needed 50 s to compile it for a
 work-group of 2 and did not finish in 10 minutes for 16.) ``log`` is replaced by a hand-written,
 vectorizable one (exponent split + 2 atanh series, below 1e-15 relative error).
+
+``field_values`` (one work-item per point) gives the field at a fixed set of points for changing centres
+and weights: the greedy fit's residual when the constraints x centres kernel matrix does not fit in
+memory (:class:`FieldEvaluator`).
 
 Device selection is explicit (platform and device named in the log): ``auto`` takes a GPU if any
 platform has one, else a CPU device.
@@ -83,6 +87,17 @@ inline void field(const double x0, const double x1, const double x2, const doubl
         s0 += b[k] * poly[3 * k]; s1 += b[k] * poly[3 * k + 1]; s2 += b[k] * poly[3 * k + 2];
     }
     out[0] = s0; out[1] = s1; out[2] = s2;
+}
+
+__kernel void field_values(__global const double *points, const int np, __global const double *cen,
+                           const int nc, __global const double *poly, const double4 shift, const double scale,
+                           const double tau, __global double *out) {
+    const int i = get_global_id(0);
+    if (i >= np) return;
+    double f[3];
+    field(points[4 * i], points[4 * i + 1], points[4 * i + 2], points[4 * i + 3], cen, nc, poly, shift, scale,
+          tau, f);
+    for (int c = 0; c < 3; ++c) out[3 * i + c] = f[c];
 }
 
 __kernel void rk45(__global const double *x_start, const int nv, __global const double *cen, const int nc,
@@ -184,6 +199,32 @@ def select_device(kind="auto"):
     return None, f"no {kind} OpenCL device with float64 support"
 
 
+def _program(device, vec=None):
+    """Context, queue, built program and vector width for ``device``."""
+    import pyopencl as cl
+
+    vec = vec or max(2, min(16, 2 * device.preferred_vector_width_double))
+    ctx = cl.Context([device])
+    return ctx, cl.CommandQueue(ctx), cl.Program(ctx, KERNEL).build(options=[f"-DVEC={vec}"]), vec
+
+
+def _centres_soa(Z, weights, vec):
+    """Normalized centres and weights in structure-of-arrays layout, (7, padded) float; padding has zero weight."""
+    padded = -(-len(Z) // vec) * vec
+    soa = np.zeros((7, padded))
+    soa[:4, :len(Z)] = np.asarray(Z).T
+    soa[4:, :len(Z)] = np.asarray(weights).T
+    return soa
+
+
+def _double4(values):
+    import pyopencl as cl
+
+    out = np.zeros(1, dtype=cl.cltypes.double4)
+    out[0] = tuple(values)
+    return out[0]
+
+
 def rk45_opencl(device, field, tau, X0, sample_times, rtol, atol, h0=0.05, max_steps=10000, vec=None, group=None):
     """Integrate every point of ``X0`` through ``field`` on an OpenCL device.
 
@@ -212,16 +253,9 @@ def rk45_opencl(device, field, tau, X0, sample_times, rtol, atol, h0=0.05, max_s
     """
     import pyopencl as cl
 
-    vec = vec or max(2, min(16, 2 * device.preferred_vector_width_double))
-    ctx = cl.Context([device])
-    queue = cl.CommandQueue(ctx)
-    program = cl.Program(ctx, KERNEL).build(options=[f"-DVEC={vec}"])
+    ctx, queue, program, vec = _program(device, vec)
     n = len(X0)
-    nc = len(field.weights)
-    padded = -(-nc // vec) * vec
-    soa = np.zeros((7, padded))   # z0..z3, w0..w2; padding has zero weight
-    soa[:4, :nc] = field.normalize(field.centers).T
-    soa[4:, :nc] = field.weights.T
+    soa = _centres_soa(field.normalize(field.centers), field.weights, vec)
     mf = cl.mem_flags
     buf = lambda a: cl.Buffer(ctx, mf.READ_ONLY | mf.COPY_HOST_PTR, hostbuf=np.ascontiguousarray(a))  # noqa: E731
     X1 = np.empty((n, 3))
@@ -229,13 +263,68 @@ def rk45_opencl(device, field, tau, X0, sample_times, rtol, atol, h0=0.05, max_s
     steps = np.empty(n, dtype=np.int32)
     rejected = np.empty(n, dtype=np.int32)
     out = [cl.Buffer(ctx, mf.WRITE_ONLY, a.nbytes) for a in (X1, samples, steps, rejected)]
-    shift = np.zeros(1, dtype=cl.cltypes.double4)
-    shift[0] = tuple(field.shift)
     program.rk45(queue, (n,), (group,) if group else None, buf(np.asarray(X0, dtype=np.float64)), np.int32(n),
-                 buf(soa), np.int32(padded), buf(field.poly), shift[0], np.float64(field.scale), np.float64(tau),
-                 np.float64(rtol), np.float64(atol), np.float64(h0), np.int32(max_steps),
+                 buf(soa), np.int32(soa.shape[1]), buf(field.poly), _double4(field.shift), np.float64(field.scale),
+                 np.float64(tau), np.float64(rtol), np.float64(atol), np.float64(h0), np.int32(max_steps),
                  buf(np.asarray(sample_times, dtype=np.float64)), np.int32(len(sample_times)), *out)
     for host, dev in zip((X1, samples, steps, rejected), out):
         cl.enqueue_copy(queue, host, dev)
     queue.finish()
     return X1, samples, steps.astype(np.int64), rejected.astype(np.int64)
+
+
+class FieldEvaluator:
+    """Values of RBF fields at one fixed set of normalized points, on an OpenCL device.
+
+    The points are uploaded once; each call streams the current centres and weights. This is the
+    greedy fit's residual evaluation when the (points x centres) kernel matrix does not fit in memory:
+    O(points x centres) work per call and O(points + centres) memory.
+
+    Parameters
+    ----------
+    device : pyopencl.Device
+    Z : (N, 4) float
+        Points in the field's normalized coordinates.
+    vec : int, optional
+        As in :func:`rk45_opencl`.
+
+    Examples
+    --------
+    >>> ev = FieldEvaluator(device, Z)                      # doctest: +SKIP
+    >>> fitted = ev(Z[centres], weights, poly)               # (N, 3), = kernel_matrix(Z, C) @ w + poly_basis(Z) @ p
+    """
+
+    def __init__(self, device, Z, vec=None):
+        import pyopencl as cl
+
+        self.ctx, self.queue, program, self.vec = _program(device, vec)
+        self.kernel = cl.Kernel(program, "field_values")
+        self.n = len(Z)
+        self.points = cl.Buffer(self.ctx, cl.mem_flags.READ_ONLY | cl.mem_flags.COPY_HOST_PTR,
+                                hostbuf=np.ascontiguousarray(Z, dtype=np.float64))
+        self.out = cl.Buffer(self.ctx, cl.mem_flags.WRITE_ONLY, max(1, self.n) * 3 * 8)
+
+    def __call__(self, C, weights, poly):
+        """``sum_j w_j phi(|z - c_j|) + pi(z)`` at every point, (N, 3) float.
+
+        Parameters
+        ----------
+        C : (n, 4) float
+            Normalized centres.
+        weights : (n, 3) float
+        poly : (15, 3) float
+            Coefficients of :func:`posefix.spacetime.rbf.poly_basis`.
+        """
+        import pyopencl as cl
+
+        soa = _centres_soa(C, weights, self.vec)
+        flags = cl.mem_flags.READ_ONLY | cl.mem_flags.COPY_HOST_PTR
+        cen = cl.Buffer(self.ctx, flags, hostbuf=soa)
+        coeffs = cl.Buffer(self.ctx, flags, hostbuf=np.ascontiguousarray(poly, dtype=np.float64))
+        out = np.empty((self.n, 3))
+        self.kernel(self.queue, (self.n,), None, self.points, np.int32(self.n), cen,
+                                  np.int32(soa.shape[1]), coeffs, _double4((0.0, 0.0, 0.0, 0.0)), np.float64(1.0),
+                                  np.float64(1.0), self.out)
+        cl.enqueue_copy(self.queue, out, self.out)
+        self.queue.finish()
+        return out
