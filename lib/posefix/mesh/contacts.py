@@ -141,8 +141,10 @@ def contact_vertices(frames, F, V_ref, distance, radius):
     near, sure_far = _vertex_bounds(cand[unsure, 1:], F, patch, to_seed, between, radius)
     far[unsure[sure_far]] = True
     unsure = unsure[~near & ~sure_far]
-    far[unsure] = non_neighbouring(cand[unsure, 1:], F, graph, radius)
     out = np.zeros(frames.shape[:2], dtype=bool)
+    out[cand[far, 0], cand[far, 1]] = True
+    unsure = unsure[~out[cand[unsure, 0], cand[unsure, 1]]]  # a vertex already in contact needs no search
+    far[unsure] = non_neighbouring(cand[unsure, 1:], F, graph, radius)
     out[cand[far, 0], cand[far, 1]] = True
     log.info("contacts per frame (%d patches, %d pairs checked exactly): %s vertices", k, len(unsure),
              ", ".join(str(c) for c in out.sum(axis=1)))
