@@ -37,6 +37,7 @@ EVALUATION = {"constraints": 150_000, "centers": 4000, "repeat": 3}
 
 def evaluation_row(seed=0):
     """Seconds of one residual evaluation, numpy vs OpenCL, on random points in the normalized box (dict)."""
+    os.environ["POCL_MAX_PTHREAD_COUNT"] = "1"  # before the OpenCL runtime starts: the fit rule's one thread
     from threadpoolctl import threadpool_limits
 
     from posefix.spacetime.integration_opencl import FieldEvaluator, select_device

@@ -15,7 +15,8 @@ The kernel values between all constraints and the centres are kept in one preall
 (constraints x max_centres) array that grows by ``batch`` columns per iteration, which makes the
 residual a matrix product. Above ``memory_bytes`` the residual is recomputed at every iteration:
 on an OpenCL device when one is given (:class:`posefix.spacetime.integration_opencl.FieldEvaluator`,
-8-10x faster than numpy at 150k constraints x 4k centres on 2 CPU cores), else in numpy chunks.
+5x faster than numpy on one CPU thread at 150k constraints x 4k centres: reports/bench/scale.md), else
+in numpy chunks.
 
 Everything is deterministic; a fit can be resumed from :meth:`GreedyFit.state` and continues
 exactly as an uninterrupted one.
