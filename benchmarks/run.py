@@ -9,8 +9,9 @@ deformation next to S1 Fig. 12-13 (benchmarks/skeletal.py, which also runs alone
 repair and the volumetric fill on every pose (benchmarks/repairs.py, which also runs alone; the pipeline runs
 with the downstream check towards every repair), S4's volumetric editing and transfer next to S4 Table 3.1
 (benchmarks/volumetric.py, which also runs alone) and S4's marker animation against the horse gallop
-(benchmarks/markers.py, which also runs alone) and S0 at production sizes, one camel and one kids pose end to end
-(benchmarks/scale.py, which also runs alone). Everything is collected into
+(benchmarks/markers.py, which also runs alone) where the integrated field's V_C error comes from (benchmarks/accuracy.py, from the
+pipeline's results) and S0 at production sizes, one camel and one kids pose end to end (benchmarks/scale.py,
+which also runs alone). Everything is collected into
 ``BENCHMARKS.md`` and ``BENCHMARKS.json`` (plus ``blocked_vs_full.png``) next to the per-library
 pieces (``summary-<library>.md``: the library's per-pose summary); the same command on the same
 data gives the same tables, times aside.
@@ -203,6 +204,7 @@ def report(info, benchmarks, note, out):
     lines += (out / "volumetric.md").read_text().splitlines() + [""]
     if (out / "markers.md").exists():  # horse-gallop present
         lines += (out / "markers.md").read_text().splitlines() + [""]
+    lines += (out / "accuracy.md").read_text().splitlines() + [""]
     lines += (out / "scale.md").read_text().splitlines() + [""]
     return "\n".join(lines)
 
@@ -224,6 +226,7 @@ def main():
     run(sys.executable, ROOT / "benchmarks" / "repairs.py", "--out", out, "--cores", args.cores)
     run(sys.executable, ROOT / "benchmarks" / "volumetric.py", "--out", out, "--threads", args.cores)
     run(sys.executable, ROOT / "benchmarks" / "markers.py", "--out", out, "--threads", args.cores)
+    run(sys.executable, ROOT / "benchmarks" / "accuracy.py", "--out", out)
     run(sys.executable, ROOT / "benchmarks" / "scale.py", "--out", out, "--cores", args.cores)
     note += f" Wall time of the whole benchmark: {(time.perf_counter() - start) / 60:.1f} min."
     (out / "BENCHMARKS.md").write_text(report(info, benchmarks, note.strip(), out))
