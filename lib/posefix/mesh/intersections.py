@@ -6,7 +6,8 @@ as in CGAL's ``do_intersect``). Pairs of faces that share a vertex are never tes
 
 Pipeline: a :mod:`posefix.mesh.bvh` box tree gives the candidate pairs whose bounding boxes overlap;
 pairs sharing a vertex are dropped; the rest go through a vectorized test built only from exact
-:func:`posefix.mesh.predicates.orient3d` signs:
+:func:`posefix.mesh.predicates.orient3d` signs (the plane-side ones from per-face
+:func:`~posefix.mesh.predicates.plane_coefficients`, computed once per call):
 
 * if all vertices of one triangle lie strictly on one side of the other's plane, no intersection;
 * otherwise (non-coplanar, non-degenerate) the triangles intersect iff an edge of one meets the
@@ -18,7 +19,8 @@ pairs sharing a vertex are dropped; the rest go through a vectorized test built 
 import numpy as np
 
 from posefix.mesh.bvh import build_box_tree, self_overlapping_pairs
-from posefix.mesh.predicates import exact_integers, orient2d_int, orient3d, orient3d_int
+from posefix.mesh.predicates import (exact_integers, orient2d_int, orient3d, orient3d_int, orient3d_plane,
+                                     plane_coefficients)
 
 _EDGES = ((0, 1), (1, 2), (2, 0))
 _CHUNK = 200_000
@@ -37,23 +39,42 @@ def self_intersecting_pairs(V, F):
     (k, 2) int64
         Face index pairs ``(f, g)``, ``f < g``, sorted lexicographically.
     """
+    T = np.asarray(V, dtype=np.float64)[F]
+    planes = plane_coefficients(T[:, 0], T[:, 1], T[:, 2])
     P = candidate_pairs(V, F)
     hits = np.zeros(len(P), dtype=bool)
     for start in range(0, len(P), _CHUNK):
-        chunk = P[start:start + _CHUNK]
-        hits[start:start + _CHUNK] = triangle_pairs_intersect(V[F[chunk[:, 0]]], V[F[chunk[:, 1]]])
-    return P[hits]
+        f, g = P[start:start + _CHUNK, 0], P[start:start + _CHUNK, 1]
+        hits[start:start + _CHUNK] = _pairs_intersect(np.take(T, f, axis=0), np.take(T, g, axis=0),
+                                                      [np.take(x, f, axis=0) for x in planes],
+                                                      [np.take(x, g, axis=0) for x in planes])
+    P = P[hits]
+    return P[np.lexsort((P[:, 1], P[:, 0]))]
 
 
 def candidate_pairs(V, F):
-    """Face pairs with overlapping bounding boxes that share no vertex, (k, 2) int64 sorted."""
-    T = V[F]
-    P = self_overlapping_pairs(build_box_tree(T.min(axis=1), T.max(axis=1)))
-    Fa, Fb = F[P[:, 0]], F[P[:, 1]]
-    shared = np.zeros(len(P), dtype=bool)
+    """Face pairs with overlapping bounding boxes that share no vertex.
+
+    Parameters
+    ----------
+    V : (n, 3) float
+    F : (m, 3) int
+
+    Returns
+    -------
+    (k, 2) int64
+        Face pairs ``(f, g)``, ``f < g``, in the box tree's deterministic order (not sorted).
+    """
+    V = np.asarray(V, dtype=np.float64)
+    A, B, C = V[F[:, 0]], V[F[:, 1]], V[F[:, 2]]
+    P = self_overlapping_pairs(build_box_tree(np.minimum(np.minimum(A, B), C), np.maximum(np.maximum(A, B), C)))
+    Ft = np.ascontiguousarray(np.asarray(F).T)
+    Fa, Fb = np.take(Ft, P[:, 0], axis=1), np.take(Ft, P[:, 1], axis=1)
+    shared = Fa[0] == Fb[0]
     for i in range(3):
         for j in range(3):
-            shared |= Fa[:, i] == Fb[:, j]
+            if i or j:
+                shared |= Fa[i] == Fb[j]
     return P[~shared]
 
 
@@ -84,14 +105,43 @@ def triangle_pairs_intersect(A, B):
     -------
     (k,) bool
     """
-    k = len(A)
-    dB = np.stack([orient3d(A[:, 0], A[:, 1], A[:, 2], B[:, i]) for i in range(3)], 1)
-    dA = np.stack([orient3d(B[:, 0], B[:, 1], B[:, 2], A[:, i]) for i in range(3)], 1)
-    separated = (np.all(dB > 0, 1) | np.all(dB < 0, 1) | np.all(dA > 0, 1) | np.all(dA < 0, 1))
+    A, B = np.asarray(A, dtype=np.float64), np.asarray(B, dtype=np.float64)
+    return _pairs_intersect(A, B, plane_coefficients(A[:, 0], A[:, 1], A[:, 2]),
+                            plane_coefficients(B[:, 0], B[:, 1], B[:, 2]))
+
+
+def _pairs_intersect(A, B, plane_a, plane_b):
+    """:func:`triangle_pairs_intersect` given each triangle's ``plane_coefficients`` (two (k, 3) arrays)."""
+    hit = np.zeros(len(A), dtype=bool)
+    dB = _plane_sides(A, plane_a, B)
+    maybe = np.flatnonzero(~_one_side(dB))
+    A, B, dB = A[maybe], B[maybe], dB[maybe]
+    dA = _plane_sides(B, [x[maybe] for x in plane_b], A)
+    hit[maybe] = _straddling_pairs_intersect(A, B, dA, dB)
+    return hit
+
+
+def _plane_sides(X, plane, Y):
+    """Exact ``orient3d(X[:, 0], X[:, 1], X[:, 2], Y[:, i])`` for i = 0, 1, 2, (k, 3) int8."""
+    return np.stack([orient3d_plane(X[:, 0], X[:, 1], X[:, 2], Y[:, i], *plane) for i in range(3)], 1)
+
+
+def _one_side(d):
+    """Rows of plane-side signs (k, 3) all strictly positive or all strictly negative, (k,) bool."""
+    return np.all(d > 0, 1) | np.all(d < 0, 1)
+
+
+def _straddling_pairs_intersect(A, B, dA, dB):
+    """Exact test of paired triangles ``A, B`` (k, 3, 3) where ``B`` does not lie strictly on one side of ``A``.
+
+    ``dA`` (k, 3) are the exact sides of ``A``'s vertices against ``B``'s plane, ``dB`` of ``B``'s
+    against ``A``'s; returns (k,) bool.
+    """
+    separated = _one_side(dA)
     special = ~separated & (np.all(dB == 0, 1) | np.all(dA == 0, 1))
     for i, j in _EDGES:
         special |= ~separated & (((dA[:, i] == 0) & (dA[:, j] == 0)) | ((dB[:, i] == 0) & (dB[:, j] == 0)))
-    hit = np.zeros(k, dtype=bool)
+    hit = np.zeros(len(A), dtype=bool)
     todo = np.flatnonzero(~separated & ~special)
     for X, Y, dX in ((A, B, dA), (B, A, dB)):
         for i, j in _EDGES:
