@@ -58,21 +58,16 @@ def build_box_tree(lo, hi, leaf_size=4):
     k = len(lo)
     order = np.argsort(_morton_codes(0.5 * (lo + hi)), kind="stable")
     leaves = 1 << max(0, int(np.ceil(np.log2(max(1, -(-k // leaf_size))))))
-    items = _slots(order[None], -1, leaves, leaf_size)[0]
-    item_lo = _slots(lo[order].T, np.inf, leaves, leaf_size)
-    item_hi = _slots(hi[order].T, -np.inf, leaves, leaf_size)
+    slots = np.full(leaves * leaf_size, k, dtype=np.int64)  # k: the empty box appended below
+    slots[:k] = order
+    slots = slots.reshape(leaves, leaf_size).T
+    item_lo = np.take(np.concatenate([lo.T, np.full((3, 1), np.inf)], 1), slots, axis=1)
+    item_hi = np.take(np.concatenate([hi.T, np.full((3, 1), -np.inf)], 1), slots, axis=1)
     levels_lo, levels_hi = [item_lo.min(axis=1)], [item_hi.max(axis=1)]
     while levels_lo[0].shape[1] > 1:
         levels_lo.insert(0, np.minimum(levels_lo[0][:, 0::2], levels_lo[0][:, 1::2]))
         levels_hi.insert(0, np.maximum(levels_hi[0][:, 0::2], levels_hi[0][:, 1::2]))
-    return BoxTree(levels_lo, levels_hi, items, item_lo, item_hi)
-
-
-def _slots(x, fill, leaves, leaf_size):
-    """Rows ``x`` (r, k) in leaf-slot layout (r, leaf_size, leaves), padded with ``fill``."""
-    out = np.full((len(x), leaves * leaf_size), fill, dtype=x.dtype)
-    out[:, :x.shape[1]] = x
-    return np.ascontiguousarray(out.reshape(len(x), leaves, leaf_size).transpose(0, 2, 1))
+    return BoxTree(levels_lo, levels_hi, np.where(slots < k, slots, -1), item_lo, item_hi)
 
 
 def self_overlapping_pairs(tree):
@@ -91,8 +86,8 @@ def self_overlapping_pairs(tree):
         b = np.concatenate([2 * b, 2 * b + 1, 2 * b, 2 * b + 1, siblings + 1])
         keep = _nodes_overlap(tree.lo[level], tree.hi[level], a, tree.lo[level], tree.hi[level], b)
         a, b = a[keep], b[keep]
-    pairs = np.concatenate([_leaf_pairs(tree, a, tree, b), _within_leaves(tree)])
-    return np.sort(pairs, axis=1)
+    i, j = np.concatenate([_leaf_pairs(tree, a, tree, b), _within_leaves(tree)], 1)
+    return np.stack([np.minimum(i, j), np.maximum(i, j)], 1)
 
 
 def cross_overlapping_pairs(tree_a, tree_b):
@@ -113,7 +108,7 @@ def cross_overlapping_pairs(tree_a, tree_b):
             a, b, lb = np.concatenate([a, a]), np.concatenate([2 * b, 2 * b + 1]), lb + 1
         keep = _nodes_overlap(tree_a.lo[la], tree_a.hi[la], a, tree_b.lo[lb], tree_b.hi[lb], b)
         a, b = a[keep], b[keep]
-    return _leaf_pairs(tree_a, a, tree_b, b)
+    return _leaf_pairs(tree_a, a, tree_b, b).T
 
 
 def _nodes_overlap(lo_a, hi_a, a, lo_b, hi_b, b):
@@ -127,7 +122,7 @@ def _nodes_overlap(lo_a, hi_a, a, lo_b, hi_b, b):
 
 
 def _leaf_pairs(tree_a, a, tree_b, b):
-    """Overlapping item pairs of the leaf pairs ``(a[p], b[p])``, every slot against every slot, (q, 2) int64."""
+    """Overlapping item pairs of the leaf pairs ``(a[p], b[p])``, every slot against every slot, (2, q) int64."""
     la, ha = np.take(tree_a.item_lo, a, axis=2), np.take(tree_a.item_hi, a, axis=2)
     lb, hb = np.take(tree_b.item_lo, b, axis=2), np.take(tree_b.item_hi, b, axis=2)
     ok = (la[0][:, None] <= hb[0][None]) & (lb[0][None] <= ha[0][:, None])  # (slots a, slots b, p)
@@ -135,18 +130,19 @@ def _leaf_pairs(tree_a, a, tree_b, b):
         ok &= (la[axis][:, None] <= hb[axis][None]) & (lb[axis][None] <= ha[axis][:, None])
     ij, p = np.divmod(np.flatnonzero(ok), len(a))
     i, j = np.divmod(ij, ok.shape[1])
-    return np.stack([tree_a.items[i, a[p]], tree_b.items[j, b[p]]], 1)
+    return np.stack([np.take(tree_a.items, i * tree_a.items.shape[1] + np.take(a, p)),
+                     np.take(tree_b.items, j * tree_b.items.shape[1] + np.take(b, p))])
 
 
 def _within_leaves(tree):
-    """Overlapping item pairs that share a leaf, (q, 2) int64."""
+    """Overlapping item pairs that share a leaf, (2, q) int64."""
     iu, ju = np.triu_indices(tree.items.shape[0], 1)
     lo, hi = tree.item_lo, tree.item_hi
     ok = (lo[0, iu] <= hi[0, ju]) & (lo[0, ju] <= hi[0, iu])  # (slot pairs, leaves)
     for axis in (1, 2):
         ok &= (lo[axis, iu] <= hi[axis, ju]) & (lo[axis, ju] <= hi[axis, iu])
     t, leaf = np.divmod(np.flatnonzero(ok), ok.shape[1])
-    return np.stack([tree.items[iu[t], leaf], tree.items[ju[t], leaf]], 1)
+    return np.stack([tree.items[iu[t], leaf], tree.items[ju[t], leaf]])
 
 
 def _morton_codes(points):
