@@ -115,37 +115,43 @@ def _pairs_intersect(A, B, plane_a, plane_b):
     hit = np.zeros(len(A), dtype=bool)
     dB = _plane_sides(A, plane_a, B)
     maybe = np.flatnonzero(~_one_side(dB))
-    A, B, dB = A[maybe], B[maybe], dB[maybe]
+    A, B, dB = A[maybe], B[maybe], dB[:, maybe]
     dA = _plane_sides(B, [x[maybe] for x in plane_b], A)
     hit[maybe] = _straddling_pairs_intersect(A, B, dA, dB)
     return hit
 
 
 def _plane_sides(X, plane, Y):
-    """Exact ``orient3d(X[:, 0], X[:, 1], X[:, 2], Y[:, i])`` for i = 0, 1, 2, (k, 3) int8."""
-    return np.stack([orient3d_plane(X[:, 0], X[:, 1], X[:, 2], Y[:, i], *plane) for i in range(3)], 1)
+    """Exact ``orient3d(X[:, 0], X[:, 1], X[:, 2], Y[:, i])`` for i = 0, 1, 2, (3, k) int8."""
+    return np.stack([orient3d_plane(X[:, 0], X[:, 1], X[:, 2], Y[:, i], *plane) for i in range(3)])
 
 
 def _one_side(d):
-    """Rows of plane-side signs (k, 3) all strictly positive or all strictly negative, (k,) bool."""
-    return np.all(d > 0, 1) | np.all(d < 0, 1)
+    """Columns of plane-side signs (3, k) all strictly positive or all strictly negative, (k,) bool."""
+    total = d[0] + d[1] + d[2]
+    return (total == 3) | (total == -3)
+
+
+def _two_zeros(d):
+    """Columns of plane-side signs (3, k) with at least two zeros, i.e. an edge in the plane, (k,) bool."""
+    zero = d == 0
+    return (zero[0] & zero[1]) | (zero[1] & zero[2]) | (zero[2] & zero[0])
 
 
 def _straddling_pairs_intersect(A, B, dA, dB):
     """Exact test of paired triangles ``A, B`` (k, 3, 3) where ``B`` does not lie strictly on one side of ``A``.
 
-    ``dA`` (k, 3) are the exact sides of ``A``'s vertices against ``B``'s plane, ``dB`` of ``B``'s
-    against ``A``'s; returns (k,) bool.
+    ``dA`` (3, k) are the exact sides of ``A``'s vertices against ``B``'s plane, ``dB`` of ``B``'s
+    against ``A``'s; returns (k,) bool. Pairs with an edge in the other's plane (which includes
+    coplanar pairs and zero-area triangles) go to :func:`triangles_intersect_exact`.
     """
     separated = _one_side(dA)
-    special = ~separated & (np.all(dB == 0, 1) | np.all(dA == 0, 1))
-    for i, j in _EDGES:
-        special |= ~separated & (((dA[:, i] == 0) & (dA[:, j] == 0)) | ((dB[:, i] == 0) & (dB[:, j] == 0)))
+    special = ~separated & (_two_zeros(dA) | _two_zeros(dB))
     hit = np.zeros(len(A), dtype=bool)
     todo = np.flatnonzero(~separated & ~special)
     for X, Y, dX in ((A, B, dA), (B, A, dB)):
         for i, j in _EDGES:
-            idx = todo[(dX[todo, i] * dX[todo, j] <= 0) & ~hit[todo]]
+            idx = todo[(dX[i, todo] * dX[j, todo] <= 0) & ~hit[todo]]
             hit[idx] = _line_through_triangle(X[idx, i], X[idx, j], Y[idx])
     for i in np.flatnonzero(special):
         hit[i] = triangles_intersect_exact(A[i], B[i])
@@ -157,8 +163,8 @@ def _line_through_triangle(p, q, T):
 
     Valid when the line is not parallel to the triangle's plane (the caller guarantees it crosses it).
     """
-    o = np.stack([orient3d(p, q, T[:, i], T[:, j]) for i, j in _EDGES], 1)
-    return np.all(o >= 0, 1) | np.all(o <= 0, 1)
+    o = [orient3d(p, q, T[:, i], T[:, j]) for i, j in _EDGES]
+    return ~(((o[0] > 0) | (o[1] > 0) | (o[2] > 0)) & ((o[0] < 0) | (o[1] < 0) | (o[2] < 0)))
 
 
 # ---------------------------------------------------------------- exact integer fallback
