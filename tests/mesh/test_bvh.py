@@ -2,6 +2,7 @@
 
 import numpy as np
 
+from posefix.mesh import bvh
 from posefix.mesh.bvh import build_box_tree, cross_overlapping_pairs, self_overlapping_pairs
 
 
@@ -37,6 +38,15 @@ def test_cross_pairs_equal_brute_force():
         P = cross_overlapping_pairs(build_box_tree(lo_a, hi_a, leaf_size=leaf_a),
                                     build_box_tree(lo_b, hi_b, leaf_size=leaf_b))
         assert np.array_equal(_sorted(P), np.argwhere(_brute(lo_a, hi_a, lo_b, hi_b)))
+
+
+def test_pairs_in_small_chunks_equal_brute_force(monkeypatch):
+    monkeypatch.setattr(bvh, "_CHUNK", 7)
+    lo, hi = _random_boxes(np.random.default_rng(5), 300, 0.2)
+    P = self_overlapping_pairs(build_box_tree(lo, hi))
+    assert np.array_equal(_sorted(P), np.argwhere(np.triu(_brute(lo, hi, lo, hi), 1)))
+    P = cross_overlapping_pairs(build_box_tree(lo[:100], hi[:100]), build_box_tree(lo[100:], hi[100:]))
+    assert np.array_equal(_sorted(P), np.argwhere(_brute(lo[:100], hi[:100], lo[100:], hi[100:])))
 
 
 def test_pairs_are_deterministic():

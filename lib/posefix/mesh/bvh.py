@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-_MORTON_BITS = 21
+_CHUNK = 16384
 
 
 @dataclass(frozen=True)
@@ -56,7 +56,7 @@ def build_box_tree(lo, hi, leaf_size=4):
     lo = np.asarray(lo, dtype=np.float64)
     hi = np.asarray(hi, dtype=np.float64)
     k = len(lo)
-    order = np.argsort(_morton_codes(0.5 * (lo + hi)), kind="stable")
+    order = np.argsort(_morton_codes(0.5 * (lo + hi)))  # ties in any (deterministic) order
     leaves = 1 << max(0, int(np.ceil(np.log2(max(1, -(-k // leaf_size))))))
     slots = np.full(leaves * leaf_size, k, dtype=np.int64)  # k: the empty box appended below
     slots[:k] = order
@@ -112,7 +112,17 @@ def cross_overlapping_pairs(tree_a, tree_b):
 
 
 def _nodes_overlap(lo_a, hi_a, a, lo_b, hi_b, b):
-    """Closed overlap of the boxes ``a`` of (3, n) ``lo_a, hi_a`` with the boxes ``b`` of ``lo_b, hi_b``, (p,) bool."""
+    """Closed overlap of the boxes ``a`` of (3, n) ``lo_a, hi_a`` with the boxes ``b`` of ``lo_b, hi_b``, (p,) bool.
+
+    Done in chunks whose temporaries stay in cache, as :func:`_leaf_pairs`.
+    """
+    chunks = [_nodes_chunk_overlap(lo_a, hi_a, a[s:s + _CHUNK], lo_b, hi_b, b[s:s + _CHUNK])
+              for s in range(0, len(a), _CHUNK)]
+    return np.concatenate(chunks) if chunks else np.zeros(0, dtype=bool)
+
+
+def _nodes_chunk_overlap(lo_a, hi_a, a, lo_b, hi_b, b):
+    """:func:`_nodes_overlap` in one pass."""
     la, ha = np.take(lo_a, a, axis=1), np.take(hi_a, a, axis=1)
     lb, hb = np.take(lo_b, b, axis=1), np.take(hi_b, b, axis=1)
     ok = (la[0] <= hb[0]) & (lb[0] <= ha[0])
@@ -122,7 +132,17 @@ def _nodes_overlap(lo_a, hi_a, a, lo_b, hi_b, b):
 
 
 def _leaf_pairs(tree_a, a, tree_b, b):
-    """Overlapping item pairs of the leaf pairs ``(a[p], b[p])``, every slot against every slot, (2, q) int64."""
+    """Overlapping item pairs of the leaf pairs ``(a[p], b[p])``, every slot against every slot, (2, q) int64.
+
+    Done in chunks of leaf pairs whose temporaries stay in cache (up to twice as fast as one pass).
+    """
+    chunks = [_leaf_chunk_pairs(tree_a, a[s:s + _CHUNK], tree_b, b[s:s + _CHUNK])
+              for s in range(0, len(a), _CHUNK)]
+    return np.concatenate(chunks, 1) if chunks else np.zeros((2, 0), dtype=np.int64)
+
+
+def _leaf_chunk_pairs(tree_a, a, tree_b, b):
+    """:func:`_leaf_pairs` in one pass."""
     la, ha = np.take(tree_a.item_lo, a, axis=2), np.take(tree_a.item_hi, a, axis=2)
     lb, hb = np.take(tree_b.item_lo, b, axis=2), np.take(tree_b.item_hi, b, axis=2)
     ok = (la[0][:, None] <= hb[0][None]) & (lb[0][None] <= ha[0][:, None])  # (slots a, slots b, p)
@@ -146,19 +166,24 @@ def _within_leaves(tree):
 
 
 def _morton_codes(points):
-    """63-bit Morton codes of points quantized on their bounding box, (k,) uint64."""
-    if len(points) == 0:
-        return np.zeros(0, dtype=np.uint64)
-    lo = points.min(axis=0)
-    extent = np.maximum(points.max(axis=0) - lo, np.finfo(float).tiny)
-    q = ((points - lo) / extent * ((1 << _MORTON_BITS) - 1)).astype(np.uint64)
-    return (_spread_bits(q[:, 0]) << np.uint64(2)) | (_spread_bits(q[:, 1]) << np.uint64(1)) | _spread_bits(q[:, 2])
+    """48-bit Morton codes of points quantized on their bounding box (16 bits per axis), (k,) uint64."""
+    code = np.zeros(len(points), dtype=np.uint64)
+    for axis in range(3):  # column by column: reductions along a length-3 axis are slow in numpy
+        x = points[:, axis]
+        lo = x.min() if len(x) else 0.0
+        extent = x.max() - lo if len(x) else 0.0
+        q = ((x - lo) * (65535.0 / extent if extent > 1e-300 else 0.0)).astype(np.uint16)
+        low, high = np.take(_SPREAD_BYTE, q & 255), np.take(_SPREAD_BYTE, q >> 8)
+        code |= ((high << np.uint64(24)) | low) << np.uint64(2 - axis)
+    return code
 
 
 def _spread_bits(x):
-    """Insert two zero bits between each of the low 21 bits of ``x`` (uint64)."""
-    x = x & np.uint64(0x1FFFFF)
-    for shift, mask in ((32, 0x1F00000000FFFF), (16, 0x1F0000FF0000FF), (8, 0x100F00F00F00F00F),
-                        (4, 0x10C30C30C30C30C3), (2, 0x1249249249249249)):
-        x = (x | (x << np.uint64(shift))) & np.uint64(mask)
-    return x
+    """Insert two zero bits between each of the low 8 bits of ``x`` (uint64)."""
+    out = np.zeros_like(x)
+    for bit in range(8):
+        out |= ((x >> np.uint64(bit)) & np.uint64(1)) << np.uint64(3 * bit)
+    return out
+
+
+_SPREAD_BYTE = _spread_bits(np.arange(256, dtype=np.uint64))
