@@ -68,7 +68,7 @@ def candidate_pairs(V, F):
     V = np.asarray(V, dtype=np.float64)
     A, B, C = V[F[:, 0]], V[F[:, 1]], V[F[:, 2]]
     P = self_overlapping_pairs(build_box_tree(np.minimum(np.minimum(A, B), C), np.maximum(np.maximum(A, B), C)))
-    Ft = np.ascontiguousarray(np.asarray(F).T)
+    Ft = np.ascontiguousarray(np.asarray(F).T, dtype=np.int32 if len(V) < 2**31 else np.int64)  # (3, m), narrow
     Fa, Fb = np.take(Ft, P[:, 0], axis=1), np.take(Ft, P[:, 1], axis=1)
     shared = Fa[0] == Fb[0]
     for i in range(3):
