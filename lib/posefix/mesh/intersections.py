@@ -5,15 +5,20 @@ as in CGAL's ``do_intersect``). Pairs of faces that share a vertex are never tes
 (the convention of S0 and of the counts in ``../shared/data/SOURCES.md``).
 
 Pipeline: a :mod:`posefix.mesh.bvh` box tree gives the candidate pairs whose bounding boxes overlap;
-pairs sharing a vertex are dropped; the rest go through a vectorized test built only from exact
-:func:`posefix.mesh.predicates.orient3d` signs (the plane-side ones from per-face
-:func:`~posefix.mesh.predicates.plane_coefficients`, computed once per call):
+pairs sharing a vertex are dropped (nine vectorized comparisons of vertex ids); the rest go through a
+vectorized test built only from exact :func:`posefix.mesh.predicates.orient3d` signs, the plane-side
+ones through :func:`~posefix.mesh.predicates.orient3d_plane` from per-face plane coefficients
+computed once per call, one triangle's plane first (which rejects most pairs) and the other's only
+for the pairs left:
 
 * if all vertices of one triangle lie strictly on one side of the other's plane, no intersection;
 * otherwise (non-coplanar, non-degenerate) the triangles intersect iff an edge of one meets the
   other closed triangle, because the endpoints of the intersection segment lie on edges;
 * coplanar pairs, zero-area triangles and edges lying in the other triangle's plane (rare) are
   decided one by one in exact integer arithmetic (:func:`triangles_intersect_exact`).
+
+Only the (few) intersecting pairs are sorted. Every sign is exact, so the result does not depend on
+the tree or on the order in which pairs are tested.
 """
 
 import numpy as np
@@ -65,10 +70,10 @@ def candidate_pairs(V, F):
     (k, 2) int64
         Face pairs ``(f, g)``, ``f < g``, in the box tree's deterministic order (not sorted).
     """
-    V = np.asarray(V, dtype=np.float64)
+    V, F = np.asarray(V, dtype=np.float64), np.asarray(F)
     A, B, C = V[F[:, 0]], V[F[:, 1]], V[F[:, 2]]
     P = self_overlapping_pairs(build_box_tree(np.minimum(np.minimum(A, B), C), np.maximum(np.maximum(A, B), C)))
-    Ft = np.ascontiguousarray(np.asarray(F).T, dtype=np.int32 if len(V) < 2**31 else np.int64)  # (3, m), narrow
+    Ft = np.ascontiguousarray(F.T, dtype=np.int32 if len(V) < 2**31 else np.int64)  # (3, m), narrow
     Fa, Fb = np.take(Ft, P[:, 0], axis=1), np.take(Ft, P[:, 1], axis=1)
     shared = Fa[0] == Fb[0]
     for i in range(3):
