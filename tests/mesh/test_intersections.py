@@ -106,6 +106,26 @@ def test_interpenetrating_spheres_match_independent_checks():
     assert np.array_equal(selected, np.flatnonzero(intersecting_faces(np.array(pairs), len(F))))
 
 
+def _brute_force_pairs(V, F):
+    """Every vertex-disjoint face pair decided by the exact integer test alone, sorted."""
+    return [(f, g) for f in range(len(F)) for g in range(f + 1, len(F))
+            if not set(F[f]) & set(F[g]) and triangles_intersect_exact(V[F[f]], V[F[g]])]
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_crumpled_meshes_equal_brute_force(seed):
+    # a sphere with its vertices snapped to a coarse integer grid and shuffled in place: many crossings,
+    # coplanar and touching pairs, repeated and collinear vertices, zero-area faces
+    rng = np.random.default_rng(seed)
+    V, F = icosphere(1)
+    V = np.round(V * 3) + rng.integers(-1, 2, size=V.shape) * (1 + seed % 2)
+    if seed >= 2:
+        V[rng.choice(len(V), 6, replace=False)] = V[rng.choice(len(V), 6, replace=False)]
+    pairs = _pairs(V, F)
+    assert pairs == _brute_force_pairs(V, F)
+    assert len(pairs) > 10
+
+
 @pytest.mark.parametrize("mesh", ["icosphere", "capsule", "torus", "demo"])
 def test_clean_meshes_have_no_intersections(mesh, demo):
     if mesh == "icosphere":

@@ -4,7 +4,8 @@ from fractions import Fraction
 
 import numpy as np
 
-from posefix.mesh.predicates import exact_integers, orient2d_int, orient3d, orient3d_exact
+from posefix.mesh.predicates import (exact_integers, orient2d_int, orient3d, orient3d_exact, orient3d_plane,
+                                     plane_coefficients)
 
 
 def _exact_sign(a, b, c, d):
@@ -41,6 +42,23 @@ def test_orient3d_exact_scalar_matches_vectorized():
     P = rng.normal(size=(4, 50, 3))
     vec = orient3d(*P)
     assert all(orient3d_exact(*(p[i] for p in P)) == vec[i] for i in range(50))
+
+
+def test_orient3d_plane_equals_orient3d_on_nearly_degenerate_points():
+    rng = np.random.default_rng(2)
+    k = 3000
+    P = rng.uniform(-1, 1, size=(4, k, 3)) * 1e3
+    P[..., 2] = 1.0 - P[..., 0] - P[..., 1]
+    P[3, :, 2] = np.nextafter(P[3, :, 2], rng.choice([-np.inf, np.inf], size=k))
+    P[3, :300] = 0.5 * (P[0, :300] + P[1, :300])  # on an edge, up to the midpoint's rounding
+    P[3, 300:400] = P[2, 300:400]  # a vertex of the plane
+    P[:, 400:600] = rng.normal(size=(4, 200, 3))  # general position
+    P[2, 600:700] = P[1, 600:700]  # degenerate plane
+    signs = orient3d_plane(*P, *plane_coefficients(P[0], P[1], P[2]))
+    assert signs.dtype == np.int8
+    assert np.array_equal(signs, orient3d(*P))
+    assert np.array_equal(signs[:700:7], [_exact_sign(*(p[i] for p in P)) for i in range(0, 700, 7)])
+    assert np.count_nonzero(signs == 0) >= 200 and np.count_nonzero(signs) > 0
 
 
 def _orient2d(a, b, c):

@@ -5,20 +5,27 @@ as in CGAL's ``do_intersect``). Pairs of faces that share a vertex are never tes
 (the convention of S0 and of the counts in ``../shared/data/SOURCES.md``).
 
 Pipeline: a :mod:`posefix.mesh.bvh` box tree gives the candidate pairs whose bounding boxes overlap;
-pairs sharing a vertex are dropped; the rest go through a vectorized test built only from exact
-:func:`posefix.mesh.predicates.orient3d` signs:
+pairs sharing a vertex are dropped (nine vectorized comparisons of vertex ids); the rest go through a
+vectorized test built only from exact :func:`posefix.mesh.predicates.orient3d` signs, the plane-side
+ones through :func:`~posefix.mesh.predicates.orient3d_plane` from per-face plane coefficients
+computed once per call, one triangle's plane first (which rejects most pairs) and the other's only
+for the pairs left:
 
 * if all vertices of one triangle lie strictly on one side of the other's plane, no intersection;
 * otherwise (non-coplanar, non-degenerate) the triangles intersect iff an edge of one meets the
   other closed triangle, because the endpoints of the intersection segment lie on edges;
 * coplanar pairs, zero-area triangles and edges lying in the other triangle's plane (rare) are
   decided one by one in exact integer arithmetic (:func:`triangles_intersect_exact`).
+
+Only the (few) intersecting pairs are sorted. Every sign is exact, so the result does not depend on
+the tree or on the order in which pairs are tested.
 """
 
 import numpy as np
 
 from posefix.mesh.bvh import build_box_tree, self_overlapping_pairs
-from posefix.mesh.predicates import exact_integers, orient2d_int, orient3d, orient3d_int
+from posefix.mesh.predicates import (exact_integers, orient2d_int, orient3d, orient3d_int, orient3d_plane,
+                                     plane_coefficients)
 
 _EDGES = ((0, 1), (1, 2), (2, 0))
 _CHUNK = 200_000
@@ -37,23 +44,42 @@ def self_intersecting_pairs(V, F):
     (k, 2) int64
         Face index pairs ``(f, g)``, ``f < g``, sorted lexicographically.
     """
+    T = np.asarray(V, dtype=np.float64)[F]
+    planes = plane_coefficients(T[:, 0], T[:, 1], T[:, 2])
     P = candidate_pairs(V, F)
     hits = np.zeros(len(P), dtype=bool)
     for start in range(0, len(P), _CHUNK):
-        chunk = P[start:start + _CHUNK]
-        hits[start:start + _CHUNK] = triangle_pairs_intersect(V[F[chunk[:, 0]]], V[F[chunk[:, 1]]])
-    return P[hits]
+        f, g = P[start:start + _CHUNK, 0], P[start:start + _CHUNK, 1]
+        hits[start:start + _CHUNK] = _pairs_intersect(np.take(T, f, axis=0), np.take(T, g, axis=0),
+                                                      [np.take(x, f, axis=0) for x in planes],
+                                                      [np.take(x, g, axis=0) for x in planes])
+    P = P[hits]
+    return P[np.lexsort((P[:, 1], P[:, 0]))]
 
 
 def candidate_pairs(V, F):
-    """Face pairs with overlapping bounding boxes that share no vertex, (k, 2) int64 sorted."""
-    T = V[F]
-    P = self_overlapping_pairs(build_box_tree(T.min(axis=1), T.max(axis=1)))
-    Fa, Fb = F[P[:, 0]], F[P[:, 1]]
-    shared = np.zeros(len(P), dtype=bool)
+    """Face pairs with overlapping bounding boxes that share no vertex.
+
+    Parameters
+    ----------
+    V : (n, 3) float
+    F : (m, 3) int
+
+    Returns
+    -------
+    (k, 2) int64
+        Face pairs ``(f, g)``, ``f < g``, in the box tree's deterministic order (not sorted).
+    """
+    V, F = np.asarray(V, dtype=np.float64), np.asarray(F)
+    A, B, C = V[F[:, 0]], V[F[:, 1]], V[F[:, 2]]
+    P = self_overlapping_pairs(build_box_tree(np.minimum(np.minimum(A, B), C), np.maximum(np.maximum(A, B), C)))
+    Ft = np.ascontiguousarray(F.T, dtype=np.int32 if len(V) < 2**31 else np.int64)  # (3, m), narrow
+    Fa, Fb = np.take(Ft, P[:, 0], axis=1), np.take(Ft, P[:, 1], axis=1)
+    shared = Fa[0] == Fb[0]
     for i in range(3):
         for j in range(3):
-            shared |= Fa[:, i] == Fb[:, j]
+            if i or j:
+                shared |= Fa[i] == Fb[j]
     return P[~shared]
 
 
@@ -84,18 +110,53 @@ def triangle_pairs_intersect(A, B):
     -------
     (k,) bool
     """
-    k = len(A)
-    dB = np.stack([orient3d(A[:, 0], A[:, 1], A[:, 2], B[:, i]) for i in range(3)], 1)
-    dA = np.stack([orient3d(B[:, 0], B[:, 1], B[:, 2], A[:, i]) for i in range(3)], 1)
-    separated = (np.all(dB > 0, 1) | np.all(dB < 0, 1) | np.all(dA > 0, 1) | np.all(dA < 0, 1))
-    special = ~separated & (np.all(dB == 0, 1) | np.all(dA == 0, 1))
-    for i, j in _EDGES:
-        special |= ~separated & (((dA[:, i] == 0) & (dA[:, j] == 0)) | ((dB[:, i] == 0) & (dB[:, j] == 0)))
-    hit = np.zeros(k, dtype=bool)
+    A, B = np.asarray(A, dtype=np.float64), np.asarray(B, dtype=np.float64)
+    return _pairs_intersect(A, B, plane_coefficients(A[:, 0], A[:, 1], A[:, 2]),
+                            plane_coefficients(B[:, 0], B[:, 1], B[:, 2]))
+
+
+def _pairs_intersect(A, B, plane_a, plane_b):
+    """:func:`triangle_pairs_intersect` given each triangle's ``plane_coefficients`` (two (k, 3) arrays)."""
+    hit = np.zeros(len(A), dtype=bool)
+    dB = _plane_sides(A, plane_a, B)
+    maybe = np.flatnonzero(~_one_side(dB))
+    A, B, dB = A[maybe], B[maybe], dB[:, maybe]
+    dA = _plane_sides(B, [x[maybe] for x in plane_b], A)
+    hit[maybe] = _straddling_pairs_intersect(A, B, dA, dB)
+    return hit
+
+
+def _plane_sides(X, plane, Y):
+    """Exact ``orient3d(X[:, 0], X[:, 1], X[:, 2], Y[:, i])`` for i = 0, 1, 2, (3, k) int8."""
+    return np.stack([orient3d_plane(X[:, 0], X[:, 1], X[:, 2], Y[:, i], *plane) for i in range(3)])
+
+
+def _one_side(d):
+    """Columns of plane-side signs (3, k) all strictly positive or all strictly negative, (k,) bool."""
+    total = d[0] + d[1] + d[2]
+    return (total == 3) | (total == -3)
+
+
+def _two_zeros(d):
+    """Columns of plane-side signs (3, k) with at least two zeros, i.e. an edge in the plane, (k,) bool."""
+    zero = d == 0
+    return (zero[0] & zero[1]) | (zero[1] & zero[2]) | (zero[2] & zero[0])
+
+
+def _straddling_pairs_intersect(A, B, dA, dB):
+    """Exact test of paired triangles ``A, B`` (k, 3, 3) where ``B`` does not lie strictly on one side of ``A``.
+
+    ``dA`` (3, k) are the exact sides of ``A``'s vertices against ``B``'s plane, ``dB`` of ``B``'s
+    against ``A``'s; returns (k,) bool. Pairs with an edge in the other's plane (which includes
+    coplanar pairs and zero-area triangles) go to :func:`triangles_intersect_exact`.
+    """
+    separated = _one_side(dA)
+    special = ~separated & (_two_zeros(dA) | _two_zeros(dB))
+    hit = np.zeros(len(A), dtype=bool)
     todo = np.flatnonzero(~separated & ~special)
     for X, Y, dX in ((A, B, dA), (B, A, dB)):
         for i, j in _EDGES:
-            idx = todo[(dX[todo, i] * dX[todo, j] <= 0) & ~hit[todo]]
+            idx = todo[(dX[i, todo] * dX[j, todo] <= 0) & ~hit[todo]]
             hit[idx] = _line_through_triangle(X[idx, i], X[idx, j], Y[idx])
     for i in np.flatnonzero(special):
         hit[i] = triangles_intersect_exact(A[i], B[i])
@@ -107,8 +168,8 @@ def _line_through_triangle(p, q, T):
 
     Valid when the line is not parallel to the triangle's plane (the caller guarantees it crosses it).
     """
-    o = np.stack([orient3d(p, q, T[:, i], T[:, j]) for i, j in _EDGES], 1)
-    return np.all(o >= 0, 1) | np.all(o <= 0, 1)
+    o = [orient3d(p, q, T[:, i], T[:, j]) for i, j in _EDGES]
+    return ~(((o[0] > 0) | (o[1] > 0) | (o[2] > 0)) & ((o[0] < 0) | (o[1] < 0) | (o[2] < 0)))
 
 
 # ---------------------------------------------------------------- exact integer fallback

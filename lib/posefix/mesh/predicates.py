@@ -47,6 +47,56 @@ def orient3d(a, b, c, d):
     return sign
 
 
+def plane_coefficients(a, b, c):
+    """Per-triangle part of :func:`orient3d`, computed once for many :func:`orient3d_plane` queries.
+
+    Parameters
+    ----------
+    a, b, c : (k, 3) float
+        Triangle vertices.
+
+    Returns
+    -------
+    normal, weight : (k, 3) float
+        ``normal`` is ``(b - a) x (c - a)`` evaluated in floating point (each component a difference
+        of two products); ``weight`` holds the sums of the two products' magnitudes, the triangle's
+        share of the error bound.
+    """
+    u, v = b - a, c - a
+    products = [(u[:, 1] * v[:, 2], u[:, 2] * v[:, 1]), (u[:, 2] * v[:, 0], u[:, 0] * v[:, 2]),
+                (u[:, 0] * v[:, 1], u[:, 1] * v[:, 0])]
+    normal = np.stack([p - q for p, q in products], 1)
+    weight = np.stack([np.abs(p) + np.abs(q) for p, q in products], 1)
+    return normal, weight
+
+
+def orient3d_plane(a, b, c, d, normal, weight):
+    """:func:`orient3d` of ``a, b, c, d`` from the precomputed ``plane_coefficients(a, b, c)``.
+
+    Parameters
+    ----------
+    a, b, c, d : (k, 3) float
+    normal, weight : (k, 3) float
+        ``plane_coefficients(a, b, c)``, row for row.
+
+    Returns
+    -------
+    (k,) int8
+        Exactly ``orient3d(a, b, c, d)``: ``det[a - d, b - d, c - d] = -(d - a) . ((b - a) x (c - a))``,
+        and the floating-point value of the right-hand side is the same cofactor expansion of a
+        determinant of rounded differences as :func:`orient3d`'s, so Shewchuk's bound ``o3derrboundA``
+        times its permanent ``|d - a| . weight`` certifies its sign; the rest is decided exactly.
+    """
+    da = d - a
+    det = da[:, 0] * normal[:, 0] + da[:, 1] * normal[:, 1] + da[:, 2] * normal[:, 2]
+    permanent = np.abs(da[:, 0]) * weight[:, 0] + np.abs(da[:, 1]) * weight[:, 1] + np.abs(da[:, 2]) * weight[:, 2]
+    sign = -np.sign(det).astype(np.int8)
+    unsure = np.flatnonzero(np.abs(det) <= _O3D_ERRBOUND_A * permanent)
+    for i in unsure:
+        sign[i] = orient3d_exact(a[i], b[i], c[i], d[i])
+    return sign
+
+
 def orient3d_exact(a, b, c, d):
     """Sign of ``det[a - d, b - d, c - d]`` in exact arithmetic, for single float points."""
     return orient3d_int(*exact_integers(a, b, c, d))
