@@ -179,8 +179,10 @@ def _step(J, g):
 
     ``J`` (r, k) sparse has its columns in elimination order (:func:`unknowns`), ``g`` = J^T r (k,).
     """
+    H = (J.T @ J).tocsr()  # sorted indices; symmetric, so its CSR arrays are its CSC arrays
     try:
-        lu = factorized((J.T @ J).tocsc(), ordering="NATURAL", symmetric=True)
+        lu = factorized(sp.csc_matrix((H.data, H.indices, H.indptr), shape=H.shape), ordering="NATURAL",
+                        symmetric=True)
     except RuntimeError:  # exactly singular
         return None
     d = lu.solve(-g)
