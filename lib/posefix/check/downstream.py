@@ -112,7 +112,8 @@ def downstream_check(V_ref, F, examples, alphas=(0.5, 1.0), k_bend=(1e-3, 1e-2, 
     settings : posefix.check.gauss_newton.SolverSettings, optional
     workers : int
         Runs at a time, each in a process of its own with one BLAS thread (the same results as one
-        after the other).
+        after the other). The processes are spawned: a calling script needs the
+        ``if __name__ == "__main__":`` guard.
 
     Returns
     -------
