@@ -6,7 +6,8 @@ for every stiffness k_b in ``--k-bend`` and weight alpha in ``--alphas`` (a grid
 are fragile). The same three far-apart handle vertices are pinned at their linear blend in every
 run; every ``--baseline`` repair is a further example, checked over the same grid. Writes per-run
 iterations, convergence, stop reason and the error after every iteration, and (``--png``) a figure
-of the energy per iteration (``posefix.report.figures.downstream_history``).
+of the energy per iteration (``posefix.report.figures.downstream_history``). With ``--threads`` N, N
+runs at a time (processes of one thread each; the same results).
 """
 
 import posefix.pipeline.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; runtime defaults before numpy)
@@ -73,7 +74,7 @@ def main(args, log):
     settings = SolverSettings(max_iters=args.max_iters, rel_tol=args.rel_tol, stall_iters=args.stall_iters)
     with timings.step("solve"):
         check = downstream_check(kf["reference"], kf["faces"], examples, args.alphas, args.k_bend, args.k_stretch,
-                                 settings)
+                                 settings, workers=args.threads)
     write_artifact(args.out, "downstream", check.datasets(),
                    params={"alphas": args.alphas, "k_bend": args.k_bend, "k_stretch": args.k_stretch,
                            "max_iters": args.max_iters, "rel_tol": args.rel_tol, "stall_iters": args.stall_iters,

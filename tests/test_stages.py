@@ -115,6 +115,16 @@ def test_downstream_runs_every_setting_towards_both_examples(demo_artifacts):
     assert (demo_artifacts / "downstream.png").stat().st_size > 10_000
 
 
+def test_downstream_with_threads_runs_the_grid_in_parallel_to_the_same_results(demo_artifacts, tmp_path):
+    run_stage("downstream", "--keyframes", demo_artifacts / "keyframes.h5", "--verify", demo_artifacts / "verify.h5",
+              "--alphas", 1.0, "--k-bend", "0.01,0.1", "--max-iters", 4, "--threads", 2, "--out", tmp_path / "d.h5")
+    with h5py.File(demo_artifacts / "downstream.h5", "r") as serial, h5py.File(tmp_path / "d.h5", "r") as parallel:
+        assert set(serial) == set(parallel)
+        for name in set(serial) - {"seconds", "metrics", "timings"}:
+            a, b = serial[name][()], parallel[name][()]
+            assert (a.tolist() == b.tolist()) if a.dtype == object else (a.tobytes() == b.tobytes()), name
+
+
 @pytest.fixture(scope="module")
 def medial(demo_artifacts):
     """A baseline artifact as stage repair_medial writes it (the datasets the report reads), whose

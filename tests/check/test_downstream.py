@@ -39,3 +39,14 @@ def test_a_baseline_is_a_third_example_over_the_same_grid():
     assert (metrics["medial_converged"], metrics["medial_iterations"]) == (metrics["repaired_converged"],
                                                                            metrics["repaired_iterations"])
     assert [c["example"] for c in check.curves()] == ["original", "repaired", "medial"] * 2
+
+
+def test_runs_in_parallel_give_the_serial_results_bit_for_bit():
+    V, F = _strip()
+    examples = {"original": _bend(V, 1.0, at=3.0), "repaired": _bend(V, 0.5, at=3.0)}
+    serial = downstream_check(V, F, examples, alphas=(0.5, 1.0), k_bend=(1e-2,))
+    parallel = downstream_check(V, F, examples, alphas=(0.5, 1.0), k_bend=(1e-2,), workers=3)
+    assert parallel.grid == serial.grid
+    for a, b in zip(parallel.runs, serial.runs):
+        assert a.V.tobytes() == b.V.tobytes() and a.errors.tobytes() == b.errors.tobytes()
+        assert (a.reason, a.gradient_reduction, a.min_area_ratio) == (b.reason, b.gradient_reduction, b.min_area_ratio)

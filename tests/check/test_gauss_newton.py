@@ -5,7 +5,7 @@ import pytest
 
 from conftest import icosphere
 from posefix.check.downstream import deform_towards, handle_vertices
-from posefix.check.gauss_newton import STOP_REASONS, SolverSettings, gauss_newton
+from posefix.check.gauss_newton import STOP_REASONS, SolverSettings, gauss_newton, unknowns
 from posefix.check.shells import dihedral_angles, mesh_hinges, shell_energy
 
 
@@ -73,3 +73,12 @@ def test_a_run_stopped_by_max_iters_is_not_converged():
 
 def test_stop_reasons_are_the_codes_of_the_artifact():
     assert STOP_REASONS[0] == "converged" and len(set(STOP_REASONS)) == len(STOP_REASONS)
+
+
+def test_unknowns_are_the_free_coordinates_vertex_by_vertex():
+    V, F = icosphere(2)
+    h = handle_vertices(V)
+    cols = unknowns(shell_energy(V, F, V, 1.0, k_bend=1e-2).jacobian(V), h)
+    free = np.setdiff1d(np.arange(len(V)), h)
+    assert np.array_equal(np.sort(cols), np.sort((3 * free[:, None] + np.arange(3)).reshape(-1)))
+    assert np.array_equal(cols.reshape(-1, 3), 3 * (cols[::3] // 3)[:, None] + np.arange(3))

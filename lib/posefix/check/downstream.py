@@ -8,9 +8,12 @@ far-apart handle vertices are pinned at their linear blend in every run.
 
 import itertools
 import logging
+import multiprocessing
+from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
+from threadpoolctl import threadpool_limits
 
 from posefix.check.gauss_newton import STOP_REASONS, gauss_newton
 from posefix.check.shells import mesh_hinges, shell_energy
@@ -93,7 +96,7 @@ class DownstreamCheck:
 
 
 def downstream_check(V_ref, F, examples, alphas=(0.5, 1.0), k_bend=(1e-3, 1e-2, 1e-1), k_stretch=1.0,
-                     settings=None):
+                     settings=None, workers=1):
     """Deform the reference towards every example over the grid alpha x k_b (S0 §5).
 
     Parameters
@@ -107,6 +110,10 @@ def downstream_check(V_ref, F, examples, alphas=(0.5, 1.0), k_bend=(1e-3, 1e-2, 
         Interpolation weights and bending stiffnesses of the grid.
     k_stretch : float
     settings : posefix.check.gauss_newton.SolverSettings, optional
+    workers : int
+        Runs at a time, each in a process of its own with one BLAS thread (the same results as one
+        after the other). The processes are spawned: a calling script needs the
+        ``if __name__ == "__main__":`` guard.
 
     Returns
     -------
@@ -115,9 +122,10 @@ def downstream_check(V_ref, F, examples, alphas=(0.5, 1.0), k_bend=(1e-3, 1e-2, 
     """
     hinges, handles, names = mesh_hinges(F), handle_vertices(V_ref), tuple(examples)
     grid = list(itertools.product(alphas, k_bend, range(len(names))))
+    jobs = [(V_ref, F, examples[names[example]], alpha, kb, k_stretch, handles, settings, hinges)
+            for alpha, kb, example in grid]
     runs = []
-    for i, (alpha, kb, example) in enumerate(grid, 1):
-        res = deform_towards(V_ref, F, examples[names[example]], alpha, kb, k_stretch, handles, settings, hinges)
+    for i, ((alpha, kb, example), res) in enumerate(zip(grid, _starmap(deform_towards, jobs, workers)), 1):
         log.info("[%d/%d] alpha %g k_b %g %-8s: %3d iterations, %s, E %.3g (%.1f s)", i, len(grid), alpha, kb,
                  names[example], res.iterations, res.reason, res.errors[-1], res.seconds)
         runs.append(res)
@@ -127,3 +135,14 @@ def downstream_check(V_ref, F, examples, alphas=(0.5, 1.0), k_bend=(1e-3, 1e-2, 
         log.info("%s: converged in %d of %d runs, %d iterations in all", name, metrics[f"{name}_converged"],
                  sum(g[2] == example for g in grid), metrics[f"{name}_iterations"])
     return check
+
+
+def _starmap(fn, jobs, workers):
+    """``fn(*job)`` for every job of ``jobs`` (list of tuples), in order: one after the other, or in
+    ``workers`` spawned processes with one BLAS thread each (the same results). Yields the results."""
+    if workers <= 1 or len(jobs) <= 1:
+        yield from itertools.starmap(fn, jobs)
+        return
+    with ProcessPoolExecutor(min(workers, len(jobs)), mp_context=multiprocessing.get_context("spawn"),
+                             initializer=threadpool_limits, initargs=(1,)) as pool:
+        yield from pool.map(fn, *zip(*jobs))

@@ -8,10 +8,10 @@ import time
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.sparse.linalg import LinearOperator, cg
+import scipy.sparse as sp
 
 from posefix.mesh.geometry import face_areas
-from posefix.mesh.sparse import factorized
+from posefix.mesh.sparse import factorized, fill_reducing_order
 
 log = logging.getLogger(__name__)
 
@@ -58,8 +58,8 @@ class SolverSettings:
 def gauss_newton(energy, V0, handles, handle_positions, F, settings=None):
     """Minimize a :class:`ShellEnergy` by Gauss–Newton with step halving, handles fixed.
 
-    Each iteration solves J^T J d = -J^T r over the free coordinates (sparse LU with a
-    fill-reducing ordering of the symmetric matrix), then tries steps 1, 1/2, 1/4, ... and
+    Each iteration solves J^T J d = -J^T r over the free coordinates (sparse LU in a fill-reducing
+    order computed once, :func:`unknowns`), then tries steps 1, 1/2, 1/4, ... and
     accepts the first that lowers the energy. It stops when the energy is zero, when the
     relative decrease falls below ``rel_tol``, when no step lowers it, after ``stall_iters``
     creeping steps in a row, or after ``max_iters``.
@@ -90,14 +90,12 @@ def gauss_newton(energy, V0, handles, handle_positions, F, settings=None):
     start = time.perf_counter()
     V = np.array(V0, dtype=float)
     V[handles] = handle_positions
-    free = np.ones(3 * energy.n, dtype=bool)
-    free[(3 * np.asarray(handles)[:, None] + np.arange(3)).reshape(-1)] = False
+    free = unknowns(energy.jacobian(V), handles)
     rest_area = face_areas(np.asarray(V0, dtype=float), F)
     r = energy.residuals(V)
     errors, steps = [float(r @ r)], []
     g0 = g = None
     reason, creeping = "max_iters", 0
-    normal = _NormalEquations()
     for _ in range(s.max_iters + 1):
         J = energy.jacobian(V)[:, free]
         g = J.T @ r
@@ -111,7 +109,7 @@ def gauss_newton(energy, V0, handles, handle_positions, F, settings=None):
         if not np.all(np.isfinite(J.data)):
             reason = "collapsed triangle"
             break
-        delta = normal.solve(J, g)
+        delta = _step(J, g)
         if delta is None:
             reason = "line-search failure"
             break
@@ -152,31 +150,40 @@ def gauss_newton(energy, V0, handles, handle_positions, F, settings=None):
                        time.perf_counter() - start)
 
 
-class _NormalEquations:
-    """Solves J^T J d = -g for a sequence of nearby Jacobians.
+def unknowns(J, handles):
+    """The free coordinates in a fill-reducing elimination order of J^T J, vertex by vertex.
 
-    Conjugate gradients preconditioned by the last sparse LU factorization (of an earlier, nearby
-    J^T J) to a relative residual of ``rtol``; a new factorization when that takes more than
-    ``max_cg`` iterations (or none exists yet). The steps are exact Gauss–Newton steps up to
-    ``rtol``; factorizations, the cost of an iteration, become rare near convergence.
+    Parameters
+    ----------
+    J : (r, 3 n) scipy.sparse matrix
+        A Jacobian (its pattern: column ``3 v + c`` for coordinate c of vertex v).
+    handles : (k,) int
+        Fixed vertices.
+
+    Returns
+    -------
+    (3 (n - k),) int64
+        Columns of ``J``: the three coordinates of every free vertex, the vertices in the order of
+        :func:`~posefix.mesh.sparse.fill_reducing_order` of their pattern in J^T J.
     """
+    n = J.shape[1] // 3
+    free = np.setdiff1d(np.arange(n), handles)
+    coo = sp.coo_matrix(J)
+    touches = sp.csr_matrix((np.ones(coo.nnz), (coo.row, coo.col // 3)), shape=(J.shape[0], n))[:, free]
+    order = free[fill_reducing_order(touches.T @ touches)]
+    return (3 * order[:, None] + np.arange(3)).reshape(-1)
 
-    def __init__(self, rtol=1e-10, max_cg=12):
-        self.rtol, self.max_cg, self.lu, self.factorizations = rtol, max_cg, None, 0
 
-    def solve(self, J, g):
-        """The step d, (k,) float; None when J^T J is singular."""
-        H = (J.T @ J).tocsc()
-        if self.lu is not None:
-            M = LinearOperator(H.shape, matvec=self.lu.solve, dtype=float)
-            d, info = cg(H, -g, rtol=self.rtol, atol=0.0, maxiter=self.max_cg, M=M)
-            if info == 0 and np.all(np.isfinite(d)):
-                return d
-        try:
-            self.lu = factorized(H, ordering="MMD_AT_PLUS_A", symmetric=True)
-        except RuntimeError:  # exactly singular
-            self.lu = None
-            return None
-        self.factorizations += 1
-        d = self.lu.solve(-g)
-        return d if np.all(np.isfinite(d)) else None
+def _step(J, g):
+    """The Gauss–Newton step d solving J^T J d = -g, (k,) float; None when J^T J is singular.
+
+    ``J`` (r, k) sparse has its columns in elimination order (:func:`unknowns`), ``g`` = J^T r (k,).
+    """
+    H = (J.T @ J).tocsr()  # sorted indices; symmetric, so its CSR arrays are its CSC arrays
+    try:
+        lu = factorized(sp.csc_matrix((H.data, H.indices, H.indptr), shape=H.shape), ordering="NATURAL",
+                        symmetric=True)
+    except RuntimeError:  # exactly singular
+        return None
+    d = lu.solve(-g)
+    return d if np.all(np.isfinite(d)) else None

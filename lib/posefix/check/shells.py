@@ -128,8 +128,9 @@ class ShellEnergy:
     length_target: np.ndarray  # (e,) l*
     angle_target: np.ndarray   # (h,) theta*
     n: int
-    _rows: np.ndarray = field(repr=False, default=None)
-    _cols: np.ndarray = field(repr=False, default=None)
+    _order: np.ndarray = field(repr=False, default=None)    # Jacobian entries in CSR order
+    _indices: np.ndarray = field(repr=False, default=None)  # their columns
+    _indptr: np.ndarray = field(repr=False, default=None)   # the rows' starts in them
 
     def __post_init__(self):
         E, H = self.hinges.edges, self.hinges.hinges
@@ -138,8 +139,10 @@ class ShellEnergy:
         cols_l = (3 * E[:, [0, 0, 0, 1, 1, 1]] + np.tile([0, 1, 2], 2)).reshape(-1)
         rows_b = np.repeat(e + np.arange(h), 12)
         cols_b = (3 * np.repeat(H, 3, axis=1) + np.tile([0, 1, 2], 4)).reshape(-1)
-        self._rows = np.r_[rows_l, rows_b]
-        self._cols = np.r_[cols_l, cols_b]
+        rows, cols = np.r_[rows_l, rows_b], np.r_[cols_l, cols_b]
+        self._order = np.lexsort((cols, rows))  # the CSR pattern, built once
+        self._indices = cols[self._order]
+        self._indptr = np.r_[0, np.cumsum(np.bincount(rows, minlength=e + h))]
 
     def residuals(self, V):
         """Residuals r, (e + h,) float: stretching rows first, then bending rows."""
@@ -159,7 +162,7 @@ class ShellEnergy:
     def jacobian(self, V):
         """Sparse Jacobian d r / d vec(V), (e + h, 3 n) CSR."""
         shape = (len(self.w_stretch) + len(self.w_bend), 3 * self.n)
-        return sp.csr_matrix((self.jacobian_values(V), (self._rows, self._cols)), shape=shape)
+        return sp.csr_matrix((self.jacobian_values(V)[self._order], self._indices, self._indptr), shape=shape)
 
     def energy(self, V):
         """Energy sum r^2 at ``V`` (n, 3) float (dimensionless)."""
