@@ -7,7 +7,7 @@ are fragile). The same three far-apart handle vertices are pinned at their linea
 run; every ``--baseline`` repair is a further example, checked over the same grid. Writes per-run
 iterations, convergence, stop reason and the error after every iteration, and (``--png``) a figure
 of the energy per iteration (``posefix.report.figures.downstream_history``). With ``--threads`` N, N
-runs at a time (processes of one thread each; the same results).
+runs at a time (processes of one thread each; the same iterations and stop reasons).
 """
 
 import posefix.pipeline.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; runtime defaults before numpy)

@@ -111,8 +111,9 @@ def downstream_check(V_ref, F, examples, alphas=(0.5, 1.0), k_bend=(1e-3, 1e-2, 
     k_stretch : float
     settings : posefix.check.gauss_newton.SolverSettings, optional
     workers : int
-        Runs at a time, each in a process of its own with one BLAS thread (the same results as one
-        after the other). The processes are spawned: a calling script needs the
+        Runs at a time, each in a process of its own with one BLAS thread: the same runs as one after
+        the other (iterations, stop reasons; bit for bit on the demo, but runs that end in a collapsed
+        triangle can differ in the last bits, reports/bench/downstream.md). The processes are spawned: a calling script needs the
         ``if __name__ == "__main__":`` guard.
 
     Returns
@@ -139,7 +140,7 @@ def downstream_check(V_ref, F, examples, alphas=(0.5, 1.0), k_bend=(1e-3, 1e-2, 
 
 def _starmap(fn, jobs, workers):
     """``fn(*job)`` for every job of ``jobs`` (list of tuples), in order: one after the other, or in
-    ``workers`` spawned processes with one BLAS thread each (the same results). Yields the results."""
+    ``workers`` spawned processes with one BLAS thread each. Yields the results."""
     if workers <= 1 or len(jobs) <= 1:
         yield from itertools.starmap(fn, jobs)
         return
