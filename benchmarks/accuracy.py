@@ -92,7 +92,8 @@ def markdown(rows):
     if every:
         secs = [(r["fit_seconds"] or 0) + (r["integrate_seconds"] or 0) for r in every]
         lines += ["", f"{sum(r['vc_max'] <= BAR for r in every)} of {len(every)} poses reach the bar; fit + integrate "
-                  f"{np.mean(secs):.1f} s per pose on average (max {max(secs):.1f} s).", ""]
+                  f"{np.mean(secs):.1f} s per pose on average (max {max(secs):.1f} s; Snakemake's seconds, two jobs "
+                  "sharing 2 cores); S0 on a GTX 460 + 4 cores: 42-74 s (issue 19, from S0 Table 1).", ""]
     return lines
 
 
