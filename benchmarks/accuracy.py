@@ -14,7 +14,6 @@ the V_C vertex that ends farthest from its target, two measurements along its *e
 """
 
 import argparse
-import csv
 import json
 import os
 from pathlib import Path
@@ -23,6 +22,7 @@ import h5py
 import numpy as np
 from scipy.interpolate import CubicSpline
 
+from posefix.pipeline.timings import benchmark_seconds
 from posefix.spacetime.rbf import RBFField
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -48,7 +48,7 @@ def pose_row(folder):
     worst = int(vc[np.argmax(deviation[vc])])
     curve = CubicSpline(time[vertex == worst], Y[vertex == worst, :3], axis=0)
     error, stretch = curve_measurements(field, curve, tau, d)
-    seconds = {s: _seconds(folder.parent / "benchmarks" / folder.name, s) for s in ("fit", "integrate")}
+    seconds = {s: benchmark_seconds(folder.parent / "benchmarks" / folder.name, s) for s in ("fit", "integrate")}
     return {"pose": folder.name, "samples": samples, "fit_seconds": seconds["fit"],
             "integrate_seconds": seconds["integrate"], "fit_max_error": fit_error,
             "vc_mean": float(deviation[vc].mean()), "vc_max": float(deviation[vc].max()), "worst_vertex": worst,
@@ -64,14 +64,6 @@ def curve_measurements(field, curve, tau, d):
     J = np.stack([(field(Y + h * np.eye(4)[a]) - field(Y - h * np.eye(4)[a])) / (2 * h) for a in range(3)], axis=2)
     rate = np.linalg.eigvalsh(0.5 * (J + J.transpose(0, 2, 1)))[:, -1]
     return error, float(np.exp(np.trapezoid(rate, t)))
-
-
-def _seconds(folder, stage):
-    files = sorted(folder.glob(f"{stage}.tsv"))
-    if not files:
-        return None
-    with open(files[0]) as fh:
-        return float(next(csv.DictReader(fh, delimiter="\t"))["s"])
 
 
 def markdown(rows):

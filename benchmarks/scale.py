@@ -13,7 +13,6 @@ Two parts, both in one run:
 """
 
 import argparse
-import csv
 import json
 import os
 import subprocess
@@ -22,6 +21,8 @@ import time
 from pathlib import Path
 
 import numpy as np
+
+from posefix.pipeline.timings import benchmark_row
 
 ROOT = Path(__file__).resolve().parents[1]
 DATA = Path(os.environ.get("POSEFIX_DATA", ROOT.parent / "shared" / "data"))
@@ -92,11 +93,9 @@ def run_case(library, cores):
 
 def _benchmark(folder, stage):
     """Seconds and max RSS (MB) of a stage from its Snakemake benchmark file, None when it did not run."""
-    files = sorted(folder.glob(f"{stage}*.tsv"))
-    if not files:
+    row = benchmark_row(folder, stage)
+    if row is None:
         return None
-    with open(files[0]) as fh:
-        row = next(csv.DictReader(fh, delimiter="\t"))
     return {"seconds": float(row["s"]), "max_rss_mb": float(row["max_rss"]) if row["max_rss"] != "NA" else None}
 
 

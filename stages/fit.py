@@ -18,9 +18,9 @@ from posefix.pipeline.artifacts import config_hash, read_artifact, write_artifac
 from posefix.pipeline.cli import library_defaults, run_stage, stage_parser
 from posefix.pipeline.errors import InputError
 from posefix.pipeline.files import file_sha256
+from posefix.pipeline.resources import cache_budget, opencl_device
 from posefix.pipeline.timings import Timings
 from posefix.spacetime.factorization import FactorizationError
-from posefix.pipeline.resources import cache_budget, opencl_device
 from posefix.spacetime.fit import FitSettings, cache_fits, fit_memory, iterate
 
 DOCS = {

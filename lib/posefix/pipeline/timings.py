@@ -24,8 +24,15 @@ class Timings(dict):
 
 def benchmark_seconds(folder, stage):
     """Wall seconds from a Snakemake benchmark file ``folder/<stage>*.tsv`` (column ``s``), None when absent."""
+    row = benchmark_row(folder, stage)
+    return None if row is None else float(row["s"])
+
+
+def benchmark_row(folder, stage):
+    """The measurements of a Snakemake benchmark file ``folder/<stage>*.tsv`` (dict of str: ``s``, ``max_rss``
+    in MB, ...), None when absent."""
     files = sorted(Path(folder).glob(f"{stage}*.tsv"))
     if not files:
         return None
     with open(files[0]) as fh:
-        return float(next(csv.DictReader(fh, delimiter="\t"))["s"])
+        return next(csv.DictReader(fh, delimiter="\t"))
