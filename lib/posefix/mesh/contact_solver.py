@@ -1,0 +1,361 @@
+"""Contact-aware motion toward per-vertex goals that never leaves the intersection-free set (IPC).
+
+Incremental Potential Contact (Li et al. 2020) on the IPC Toolkit (``ipctk``): a log barrier on the
+distances below ``dhat`` between non-adjacent primitives (vertex-face and edge-edge pairs) keeps every
+contact open, and a continuous-collision-detection (CCD) bound on every line-search step makes sure no
+step passes through one. Minimized, by Newton's method with the PSD-projected barrier Hessian::
+
+    E(x) = 1/2 sum_i w_i a_i |x_i - g_i|^2 + 1/2 l^4 (x - g)^T L^T M^-1 L (x - g) + kappa B(x)
+
+``g``: the goals, ``w``: per-vertex weights, ``a``: vertex areas over their mean, ``L``/``M``: the
+cotangent Laplacian and lumped areas of the reference (so the bi-Laplacian smoothness term spreads a
+contact's push over about the smoothing length ``l``, and a rigid motion of the goals costs nothing),
+``kappa``: IPC's adaptive barrier stiffness.
+
+The reference may intersect itself. Its intersecting faces are *tolerated*: a primitive pair whose
+every incident face is tolerated is removed from the broad phase's candidates before the barrier and
+the CCD see them (an intersection it may form involves tolerated faces only), and no other pair is:
+a face that does not intersect in the reference never comes to intersect anything. (A vertex-pair
+filter such as ``ipctk``'s ``can_collide`` would silence every primitive that shares such a vertex.)
+
+:class:`ContactSolver` precomputes per reference; :meth:`ContactSolver.compute_pose` moves one pose.
+"""
+
+import logging
+import time
+from dataclasses import dataclass
+
+import ipctk
+import numpy as np
+import scipy.sparse as sp
+
+from posefix.mesh.geometry import bbox_diagonal, vertex_areas
+from posefix.mesh.laplacian import cotangent_laplacian
+from posefix.mesh.sparse import factorized, fill_reducing_order
+
+log = logging.getLogger(__name__)
+
+_PSD = ipctk.PSDProjectionMethod.CLAMP
+
+_CCD = ipctk.TightInclusionCCD(1e-6, 1000)
+"""Tight-Inclusion CCD; past 1000 iterations it returns its conservative lower bound of the time of impact
+(the default, 1e7 iterations, spent 10-15 s on one step of two touching spheres for no real gain)."""
+
+
+@dataclass(frozen=True)
+class ContactSettings:
+    """How the contact solver moves a pose; lengths relative to the reference's bounding-box diagonal ``d``.
+
+    Attributes
+    ----------
+    dhat : float
+        Barrier activation distance / d (IPC's usual 1e-3 pushed parts of the lion reference apart at rest).
+    touching : float
+        Primitive pairs of the reference closer than ``touching * d`` are tolerated (parts touching at rest:
+        the barrier cannot start from a distance of 0).
+    smoothing : float
+        Smoothing length ``l`` / d of the bi-Laplacian term.
+    tolerance : float
+        Newton stops when its step moves no vertex farther than ``tolerance * d``.
+    max_iterations : int
+        Newton iterations at most.
+    """
+
+    dhat: float = 2e-4
+    touching: float = 1e-9
+    smoothing: float = 0.02
+    tolerance: float = 1e-5
+    max_iterations: int = 200
+
+
+@dataclass
+class ContactResult:
+    """A pose moved by :meth:`ContactSolver.compute_pose`.
+
+    Attributes
+    ----------
+    X : (n, 3) float
+        Positions, intersection-free up to the tolerated faces' own intersections.
+    converged : bool
+        Newton's step fell below the tolerance (else the iterations ran out or the line search stalled).
+    iterations : int
+        Newton iterations.
+    contact : (n,) bool
+        Vertices of a primitive pair closer than ``dhat`` at the end (the barrier holds them off their goals).
+    min_distance : float
+        Smallest distance between non-tolerated, non-adjacent primitives closer than ``dhat`` (length units;
+        ``inf`` when none is).
+    seconds : float
+        Wall time.
+    """
+
+    X: np.ndarray
+    converged: bool
+    iterations: int
+    contact: np.ndarray
+    min_distance: float
+    seconds: float
+
+
+def tolerated_primitives(F, E, faces_to_edges, tolerated_faces, n):
+    """Vertices, edges and faces all of whose incident faces are tolerated.
+
+    Parameters
+    ----------
+    F : (m, 3) int
+    E : (e, 2) int
+        The mesh's edges.
+    faces_to_edges : (m, 3) int
+        Row of ``E`` of each face's edges.
+    tolerated_faces : (m,) bool
+    n : int
+        Vertex count.
+
+    Returns
+    -------
+    vertices : (n,) bool
+    edges : (e,) bool
+    faces : (m,) bool
+
+    Examples
+    --------
+    >>> F = np.array([[0, 1, 2], [0, 2, 3]]); E = np.array([[0, 1], [1, 2], [0, 2], [2, 3], [0, 3]])
+    >>> v, e, f = tolerated_primitives(F, E, np.array([[0, 1, 2], [2, 3, 4]]), np.array([True, False]), 4)
+    >>> v.tolist(), e.tolist()
+    ([False, True, False, False], [True, True, False, False, False])
+    """
+    vertices = np.ones(n, dtype=bool)
+    vertices[F[~tolerated_faces].ravel()] = False
+    vertices[np.setdiff1d(np.arange(n), F.ravel())] = False
+    edges = np.zeros(len(E), dtype=bool)
+    edges[faces_to_edges[tolerated_faces].ravel()] = True
+    edges[faces_to_edges[~tolerated_faces].ravel()] = False
+    return vertices, edges, tolerated_faces.copy()
+
+
+class ContactSolver:
+    """Moves poses of one reference toward goals through intersection-free shapes only.
+
+    Parameters
+    ----------
+    V_ref : (n, 3) float
+        Reference positions (the smoothness operator and the clearance are the reference's).
+    F : (m, 3) int
+    tolerated_faces : (m,) bool, optional
+        Faces that may intersect (the reference's own intersecting faces); none by default. Primitive pairs
+        closer than ``touching * d`` in the reference (parts touching at rest) are tolerated too.
+    settings : ContactSettings
+    threads : int
+        Threads of ``ipctk``'s broad and narrow phases.
+
+    Examples
+    --------
+    >>> from posefix.mesh.primitives import capsule
+    >>> V, F = capsule(around=12, cap_rings=3, length_rings=6)
+    >>> solver = ContactSolver(V, F)
+    >>> r = solver.compute_pose(V, V + [0.5, 0.0, 0.0], np.ones(len(V)))
+    >>> bool(r.converged), float(np.abs(r.X - V - [0.5, 0.0, 0.0]).max()) < 1e-12
+    (True, True)
+    """
+
+    def __init__(self, V_ref, F, tolerated_faces=None, settings=ContactSettings(), threads=1):
+        ipctk.set_num_threads(threads)
+        ipctk.set_logger_level(ipctk.LoggerLevel.warn)
+        V_ref = np.asarray(V_ref, dtype=np.float64)
+        self.F, self.d, self.settings = np.asarray(F, dtype=np.int32), bbox_diagonal(V_ref), settings
+        E = ipctk.edges(self.F)
+        self.mesh = ipctk.CollisionMesh(V_ref, E, self.F)
+        tolerated = np.zeros(len(F), dtype=bool) if tolerated_faces is None else np.asarray(tolerated_faces, bool)
+        self.tolerated = tolerated_primitives(self.F, E, self.mesh.faces_to_edges, tolerated, len(V_ref))
+        self._touching = (np.zeros(0, np.int64), np.zeros(0, np.int64))
+        distances = self._candidate_distances(self.candidates(V_ref, inflation=settings.dhat * self.d), V_ref)
+        touching = [keys[dist < settings.touching * self.d] for keys, dist in distances]
+        self._touching = tuple(np.unique(k) for k in touching)
+        apart = np.concatenate([dist[dist >= settings.touching * self.d] for _, dist in distances])
+        self.clearance = float(apart.min()) if len(apart) else settings.dhat * self.d
+        self.dhat = settings.dhat * self.d
+        self.barrier = ipctk.BarrierPotential(self.dhat, 1.0)
+        self._smoothness = _smoothness(V_ref, self.F, settings.smoothing * self.d)
+        self._order = fill_reducing_order(sp.kron(self._smoothness[1] + sp.identity(len(V_ref)), np.ones((3, 3))))
+        log.info("contact solver: %d vertices, %d tolerated faces and %d pairs touching at rest, clearance %.2e d, "
+                 "dhat %.2e d", len(V_ref), int(tolerated.sum()), sum(len(k) for k in self._touching),
+                 self.clearance / self.d, self.dhat / self.d)
+
+    def candidates(self, X0, X1=None, inflation=None):
+        """The broad phase's primitive pairs near ``X0`` (or swept from ``X0`` to ``X1``), tolerated pairs removed.
+
+        Parameters
+        ----------
+        X0, X1 : (n, 3) float
+        inflation : float, optional
+            Box inflation (length units); ``dhat`` by default.
+
+        Returns
+        -------
+        ipctk.Candidates
+        """
+        c = ipctk.Candidates()
+        inflation = self.dhat if inflation is None else inflation
+        if X1 is None:
+            c.build(self.mesh, X0, inflation)
+        else:
+            c.build(self.mesh, X0, X1, inflation)
+        v_ok, e_ok, f_ok = self.tolerated
+        (ee, ee_keys), (fv, fv_keys) = self._pairs(c)
+        drop = (e_ok[ee[:, 0]] & e_ok[ee[:, 1]]) | np.isin(ee_keys, self._touching[0])
+        c.ee_candidates = [k for k, out in zip(c.ee_candidates, drop) if not out]
+        drop = (f_ok[fv[:, 0]] & v_ok[fv[:, 1]]) | np.isin(fv_keys, self._touching[1])
+        c.fv_candidates = [k for k, out in zip(c.fv_candidates, drop) if not out]
+        return c
+
+    def _pairs(self, c):
+        """((edge pairs (k, 2), keys (k,)), (face-vertex pairs (l, 2), keys (l,))) of the candidates ``c``, int64:
+        one key per unordered edge pair and per face-vertex pair."""
+        ee = np.array([(k.edge0_id, k.edge1_id) for k in c.ee_candidates], dtype=np.int64).reshape(-1, 2)
+        fv = np.array([(k.face_id, k.vertex_id) for k in c.fv_candidates], dtype=np.int64).reshape(-1, 2)
+        ne, n = self.mesh.num_edges, self.mesh.num_vertices
+        return (ee, ee.min(axis=1) * ne + ee.max(axis=1)), (fv, fv[:, 0] * n + fv[:, 1])
+
+    def _candidate_distances(self, c, X):
+        """(keys, distances) of the edge-edge and of the face-vertex candidates of ``c`` at ``X`` (length units)."""
+        E, F = self.mesh.edges, self.mesh.faces
+        (_, ee_keys), (_, fv_keys) = self._pairs(c)
+        ee = np.array([k.compute_distance(X, E, F) for k in c.ee_candidates], dtype=np.float64)
+        fv = np.array([k.compute_distance(X, E, F) for k in c.fv_candidates], dtype=np.float64)
+        return (ee_keys, np.sqrt(ee)), (fv_keys, np.sqrt(fv))
+
+    def collisions(self, X, candidates=None):
+        """The barrier's active pairs (closer than ``dhat``) at ``X``, tolerated pairs excluded (ipctk.NormalCollisions)."""
+        C = ipctk.NormalCollisions()
+        C.build(self.candidates(X) if candidates is None else candidates, self.mesh, X, self.dhat)
+        return C
+
+    def min_distance(self, X, collisions=None):
+        """Smallest distance between non-tolerated primitives closer than ``dhat`` at ``X``; ``inf`` when none is."""
+        C = self.collisions(X) if collisions is None else collisions
+        return float(np.sqrt(C.compute_minimum_distance(self.mesh, X))) if len(C) else np.inf
+
+    def contact_vertices(self, collisions, n):
+        """Vertices of the pairs of ``collisions`` (ipctk.NormalCollisions), (n,) bool."""
+        contact = np.zeros(n, dtype=bool)
+        for k in range(len(collisions)):
+            ids = np.asarray(collisions[k].vertex_ids(self.mesh.edges, self.mesh.faces))
+            contact[ids[ids >= 0]] = True
+        return contact
+
+    def compute_pose(self, start, goal, weights, tolerance=None):
+        """Move ``start`` toward ``goal`` without leaving the intersection-free set.
+
+        Parameters
+        ----------
+        start : (n, 3) float
+            Intersection-free positions (up to the tolerated faces): every non-tolerated pair apart.
+        goal : (n, 3) float
+            Goal positions.
+        weights : (n,) float
+            Per-vertex weights of the goals (positive somewhere on every connected part).
+        tolerance : float, optional
+            Newton's stopping step / d (``settings.tolerance`` by default; looser for waypoints of a path).
+
+        Returns
+        -------
+        ContactResult
+
+        Raises
+        ------
+        ValueError
+            ``start`` has two non-tolerated primitives in contact (distance 0): it is not intersection-free.
+        """
+        t0 = time.perf_counter()
+        newton = _Newton(self, np.asarray(goal, dtype=np.float64), np.asarray(weights, dtype=np.float64),
+                         self.settings.tolerance if tolerance is None else tolerance)
+        X, converged, iterations = newton.run(np.array(start, dtype=np.float64))
+        C = self.collisions(X)
+        return ContactResult(X, converged, iterations, self.contact_vertices(C, len(X)), self.min_distance(X, C),
+                             time.perf_counter() - t0)
+
+
+def _smoothness(V, F, length):
+    """Vertex areas over their mean (n,) and the smoothness matrix ``l^4 L^T M^-1 L / mean area`` (n, n)."""
+    area = vertex_areas(V, F)
+    mean = float(area.mean())
+    L = cotangent_laplacian(V, F)
+    return area / mean, (L.T @ sp.diags(1.0 / area) @ L) * (length ** 4 / mean)
+
+
+class _Newton:
+    """Newton's method with the barrier and a CCD-bounded backtracking line search for one pose."""
+
+    def __init__(self, solver, goal, weights, tolerance):
+        self.s, self.goal, self.tolerance = solver, goal, tolerance
+        mass, smooth = solver._smoothness
+        Q = sp.diags(weights * mass) + smooth
+        self.H0 = sp.kron(Q, sp.identity(3), format="csc")
+        self.kappa = None
+        self.kappa_max = None
+
+    def energy(self, X, C):
+        u = (X - self.goal).ravel()
+        return 0.5 * u @ (self.H0 @ u) + self.kappa * self.s.barrier(C, self.s.mesh, X)
+
+    def run(self, X):
+        s = self.s
+        C = s.collisions(X)
+        if len(C) and s.min_distance(X, C) <= 0.0:
+            raise ValueError("the start has non-tolerated primitives in contact (it is not intersection-free)")
+        self._init_stiffness(X, C)
+        previous = s.min_distance(X, C)
+        for it in range(1, s.settings.max_iterations + 1):
+            dx = self._direction(X, C)
+            if np.abs(dx).max() <= self.tolerance * s.d:
+                return X, True, it - 1
+            X_new, C_new, ok = self._line_search(X, dx, C)
+            if not ok:
+                return X, False, it
+            log.debug("newton %d: step %.2e d (%.3g of Newton's), %d active pairs, kappa %.2e", it,
+                      np.abs(X_new - X).max() / s.d, np.abs(X_new - X).max() / np.abs(dx).max(), len(C_new), self.kappa)
+            X, C = X_new, C_new
+            current = s.min_distance(X, C)
+            if np.isfinite(current):
+                self.kappa = ipctk.update_barrier_stiffness(previous ** 2 if np.isfinite(previous) else s.dhat ** 2,
+                                                            current ** 2, self.kappa_max, self.kappa, s.d)
+            previous = current
+        return X, False, s.settings.max_iterations
+
+    def _init_stiffness(self, X, C):
+        s = self.s
+        grad_energy = self.H0 @ (X - self.goal).ravel()
+        grad_barrier = s.barrier.gradient(C, s.mesh, X) if len(C) else np.zeros(X.size)
+        mass = float(self.H0.diagonal().mean())
+        self.kappa, self.kappa_max = ipctk.initial_barrier_stiffness(s.d, s.barrier.barrier, s.dhat, mass,
+                                                                     grad_energy, grad_barrier)
+
+    def _direction(self, X, C):
+        s = self.s
+        grad = self.H0 @ (X - self.goal).ravel()
+        if len(C):
+            grad = grad + self.kappa * s.barrier.gradient(C, s.mesh, X)
+            H = self.H0 + self.kappa * s.barrier.hessian(C, s.mesh, X, _PSD)
+        else:
+            H = self.H0
+        p = s._order
+        dx = np.empty_like(grad)
+        dx[p] = factorized(sp.csc_matrix(H)[p][:, p], "NATURAL", symmetric=True).solve(-grad[p])
+        return dx.reshape(-1, 3)
+
+    def _line_search(self, X, dx, C):
+        """``(X, collisions, accepted)`` after the largest step ``alpha dx`` that CCD allows and that lowers the
+        energy, halving from there; the swept step's candidates serve every trial."""
+        s = self.s
+        target = X + dx
+        candidates = s.candidates(X, target)
+        alpha = candidates.compute_collision_free_stepsize(s.mesh, X, target, 0.0, _CCD) if not candidates.empty() else 1.0
+        e0 = self.energy(X, C)
+        while alpha > 1e-12:
+            X_new = X + alpha * dx
+            C_new = ipctk.NormalCollisions()
+            C_new.build(candidates, s.mesh, X_new, s.dhat)
+            if self.energy(X_new, C_new) <= e0:
+                return X_new, C_new, True
+            alpha *= 0.5
+        return X, C, False

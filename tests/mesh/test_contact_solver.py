@@ -1,0 +1,122 @@
+import numpy as np
+import pytest
+import trimesh
+
+from posefix.mesh.contact_solver import ContactSettings, ContactSolver, tolerated_primitives
+from posefix.mesh.intersections import intersecting_faces, self_intersecting_pairs
+from posefix.mesh.rotations import rotation_exp
+
+
+def sphere(centre, radius=1.0, subdivisions=2):
+    s = trimesh.creation.icosphere(subdivisions=subdivisions, radius=radius)
+    return np.asarray(s.vertices) + centre, np.asarray(s.faces)
+
+
+def union(*parts):
+    V, F, offset = [], [], 0
+    for Vi, Fi in parts:
+        V.append(Vi)
+        F.append(Fi + offset)
+        offset += len(Vi)
+    return np.vstack(V), np.vstack(F)
+
+
+def test_two_spheres_pushed_into_each_other_stop_with_a_gap_up_to_dhat():
+    V, F = union(sphere([-1.2, 0, 0]), sphere([1.2, 0, 0]))
+    left = np.arange(len(V)) < len(V) // 2
+    goal = V + np.where(left[:, None], [0.6, 0, 0], [-0.6, 0, 0])  # 1 unit of overlap
+    solver = ContactSolver(V, F)
+    r = solver.compute_pose(V, goal, np.ones(len(V)))
+    assert r.converged
+    assert 0.0 < r.min_distance <= solver.dhat
+    assert len(self_intersecting_pairs(r.X, F)) == 0
+    assert r.contact.any() and not r.contact.all()
+    # the spheres did move toward each other: only dhat apart at the closest points
+    assert r.X[left, 0].max() > -0.01 and r.X[~left, 0].min() < 0.01
+
+
+def test_a_rigid_motion_of_the_goals_comes_back_exactly():
+    V, F = union(sphere([-1.2, 0, 0]), sphere([1.2, 0, 0]))
+    R = rotation_exp(np.array([[0.2, -0.5, 0.3]]))[0]
+    goal = V @ R.T + [0.3, -2.0, 1.0]
+    r = ContactSolver(V, F).compute_pose(V, goal, np.ones(len(V)))
+    assert r.converged and not r.contact.any()
+    assert np.abs(r.X - goal).max() < 1e-12
+
+
+def test_a_reference_with_its_own_intersections_keeps_them_and_forms_no_new_pair():
+    V, F = union(sphere([-0.9, 0, 0]), sphere([0.9, 0, 0]), sphere([0, 2.4, 0], radius=0.8))
+    ref_faces = intersecting_faces(self_intersecting_pairs(V, F), len(F))
+    assert 0 < ref_faces.sum() < len(F) // 3
+    solver = ContactSolver(V, F, tolerated_faces=ref_faces)
+    assert solver.compute_pose(V, V, np.ones(len(V))).X.tolist() == V.tolist()  # nothing pushed apart at rest
+    n = len(V) // 3
+    goal = V.copy()
+    goal[n:2 * n] += [-0.5, 0, 0]  # deeper into the first sphere
+    goal[2 * n:] += [0, -1.6, 0]  # the third sphere down into the intersecting pair
+    r = solver.compute_pose(V, goal, np.ones(len(V)))
+    faces = intersecting_faces(self_intersecting_pairs(r.X, F), len(F))
+    assert not (faces & ~ref_faces).any()
+    assert r.contact.any()
+    assert np.abs(r.X[2 * n:, 1] - V[2 * n:, 1]).max() > 0.5  # the third sphere moved until it touched
+
+
+def test_only_pairs_of_tolerated_faces_are_removed_from_the_candidates():
+    box = trimesh.creation.box(extents=[2.0, 2.0, 2.0])
+    ball = sphere([0, 0, 0], radius=0.5, subdivisions=3)
+    tip = ball[0][np.argmin(ball[0][:, 0])]
+    ball = (ball[0] + [0.999 - tip[0], -tip[1], -tip[2]], ball[1])  # its leftmost vertex just through the box face
+    V, F = union((np.asarray(box.vertices), np.asarray(box.faces)), ball)
+    ref_faces = intersecting_faces(self_intersecting_pairs(V, F), len(F))
+    solver = ContactSolver(V, F, tolerated_faces=ref_faces)
+    every = ContactSolver(V, F).candidates(V, inflation=0.3)
+    kept = solver.candidates(V, inflation=0.3)
+    E = solver.mesh.edges
+    edge_faces = {}
+    for f, edges in enumerate(solver.mesh.faces_to_edges):
+        for e in edges:
+            edge_faces.setdefault(int(e), []).append(f)
+    vertex_faces = {}
+    for f, face in enumerate(F):
+        for v in face:
+            vertex_faces.setdefault(int(v), []).append(f)
+    tolerated_ee = {(c.edge0_id, c.edge1_id) for c in every.ee_candidates
+                    if ref_faces[edge_faces[c.edge0_id] + edge_faces[c.edge1_id]].all()}
+    tolerated_fv = {(c.face_id, c.vertex_id) for c in every.fv_candidates
+                    if ref_faces[[c.face_id] + vertex_faces[c.vertex_id]].all()}
+    assert tolerated_ee and tolerated_fv
+    assert {(c.edge0_id, c.edge1_id) for c in kept.ee_candidates} == \
+        {(c.edge0_id, c.edge1_id) for c in every.ee_candidates} - tolerated_ee
+    assert {(c.face_id, c.vertex_id) for c in kept.fv_candidates} == \
+        {(c.face_id, c.vertex_id) for c in every.fv_candidates} - tolerated_fv
+    assert len(E) == len(solver.tolerated[1])
+
+
+def test_one_large_step_through_a_thin_wall_is_cut_by_ccd():
+    wall = trimesh.creation.box(extents=[0.02, 4.0, 4.0])  # a thin wall at x = 0
+    ball = sphere([-0.5, 0, 0], radius=0.2, subdivisions=1)
+    V, F = union((np.asarray(wall.vertices), np.asarray(wall.faces)), ball)
+    moving = np.arange(len(V)) >= len(wall.vertices)
+    goal = V + np.where(moving[:, None], [1.0, 0, 0], [0, 0, 0])  # one step would jump to the other side
+    weights = np.where(moving, 1.0, 1e6)
+    r = ContactSolver(V, F, settings=ContactSettings(smoothing=0.0)).compute_pose(V, goal, weights)
+    assert r.X[moving, 0].max() < -0.01  # still on its side, pressed against the wall
+    assert r.X[moving, 0].max() > -0.02
+    assert len(self_intersecting_pairs(r.X, F)) == 0
+
+
+def test_tolerated_primitives_of_one_face():
+    F = np.array([[0, 1, 2], [0, 2, 3]])
+    E = np.array([[0, 1], [1, 2], [0, 2], [2, 3], [0, 3]])
+    v, e, f = tolerated_primitives(F, E, np.array([[0, 1, 2], [2, 3, 4]]), np.array([True, False]), 4)
+    assert v.tolist() == [False, True, False, False]
+    assert e.tolist() == [True, True, False, False, False]
+    assert f.tolist() == [True, False]
+
+
+def test_a_start_in_contact_is_refused():
+    V, F = union(sphere([-1.0, 0, 0]), sphere([1.0, 0, 0]))  # touching at x = 0
+    V[np.argmax(V[:, 0] * (np.arange(len(V)) < len(V) // 2))] = 0.0
+    V[len(V) // 2 + np.argmin(V[len(V) // 2:, 0])] = 0.0
+    with pytest.raises(ValueError, match="not intersection-free"):
+        ContactSolver(V, F, settings=ContactSettings(touching=0.0)).compute_pose(V, V, np.ones(len(V)))
