@@ -4,7 +4,7 @@
 #   -> fit -> integrate -> verify -> export (the repaired mesh), render (report figures) and
 #   downstream (Gauss-Newton check of original vs repaired pose, S0 §5, with its figure);
 #   then summary and overview over all poses. Beside S0, per pose, the baseline repairs of config
-#   `baselines` (rules/baselines.smk: skeleton -> repair_medial -> export_medial, S1's medial balls). `snakemake --report reports/<library>/report.html`
+#   `baselines` (rules/baselines.smk: medial balls, volumetric fill, contact). `snakemake --report reports/<library>/report.html`
 #   collects the report() outputs (captions in rules/captions/).
 # Beside it, `snakemake author` (rules/skeletal.smk, S1) authors a pose library from a rig file, and
 # `snakemake author_volumetric` (rules/volumetric.smk, S4) from a pose script of handle moves.

@@ -1,8 +1,9 @@
 # Baseline repairs beside S0, compared in the report (config `baselines`). medial: the reference's
 # skeletal mesh once (S1 §2, settings of skeletal_pose), then per pose the medial repair (S1 §4 flow from
 # the target, posefix.skeletal.repair). volumetric: the reference's tet mesh once (S4 §2.1), then per pose
-# the volumetric fill of the free region (S4's editor, posefix.volumetric.fill). Every baseline's repaired
-# mesh is exported in the target's format.
+# the volumetric fill of the free region (S4's editor, posefix.volumetric.fill). contact: per pose, the
+# reference carried through S0's key frames by the IPC contact solver (posefix.contact.keyframe_tracking).
+# Every baseline's repaired mesh is exported in the target's format.
 
 MEDIAL = config["repair_medial"]
 FILL = config["repair_volumetric"]
@@ -98,6 +99,27 @@ rule repair_volumetric:
         "{params.python:q} {params.script:q} --reference {input.reference:q} --target {input.target:q}"
         " --classify {input.classify:q} --tets {input.tets:q} --out {output:q} {params.options}"
         " --threads {threads} --log {log:q}"
+
+
+rule repair_contact:
+    input:
+        keyframes=f"{RESULTS}/{{pose}}/keyframes.h5",
+        classify=f"{RESULTS}/{{pose}}/classify.h5",
+    output:
+        f"{RESULTS}/{{pose}}/contact.h5",
+    params:
+        options=" ".join(f"--{key.replace('_', '-')} {value}" for key, value in config["contact"].items()),
+        python=PYTHON,
+        script=stage_script("repair_contact"),
+        code=stage_code("repair_contact"),
+    threads: config["repair_contact"]["threads"]
+    log:
+        f"{RESULTS}/logs/{{pose}}/repair_contact.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/{{pose}}/repair_contact.tsv"
+    shell:
+        "{params.python:q} {params.script:q} --keyframes {input.keyframes:q} --classify {input.classify:q}"
+        " --out {output:q} {params.options} --threads {threads} --log {log:q}"
 
 
 rule export_baseline:

@@ -107,7 +107,7 @@ RESULTS = f"{config['results']}/{LIBRARY.name}"
 REPORTS = f"{config['reports']}/{LIBRARY.name}"
 IS_DEMO = config["library"] is None
 BASELINES = config["baselines"]  # repairs beside S0, compared in the report
-BASELINE_CHOICES = ("medial", "volumetric")  # stage repair_<name> writes results/<library>/<pose>/<name>.h5
+BASELINE_CHOICES = ("medial", "volumetric", "contact")  # stage repair_<name> writes results/<library>/<pose>/<name>.h5
 
 
 def baseline_artifacts(pose):

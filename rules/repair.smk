@@ -10,6 +10,12 @@ rule verify:
     output:
         f"{RESULTS}/{{pose}}/verify.h5",
     params:
+        finish=config["verify"]["finish"],
+        free_goal=config["verify"]["free_goal"],
+        weight=config["verify"]["constrained_weight"],
+        contact=" ".join(
+            f"--{key.replace('_', '-')} {value}" for key, value in config["contact"].items()
+        ),
         fallback=config["verify"]["fallback_eps"],
         fallback_fit=config["verify"]["fallback_fit"],
         ring=config["verify"]["ring"],
@@ -30,7 +36,9 @@ rule verify:
         f"{RESULTS}/benchmarks/{{pose}}/verify.tsv"
     shell:
         "{params.python:q} {params.script:q} --keyframes {input.keyframes:q} --classify {input.classify:q}"
-        " --integrate {input.integrate:q} --fit {input.fit:q} --fallback-eps {params.fallback}"
+        " --integrate {input.integrate:q} --fit {input.fit:q} --finish {params.finish}"
+        " --free-goal {params.free_goal} --constrained-weight {params.weight} {params.contact}"
+        " --fallback-eps {params.fallback}"
         " --fallback-fit {params.fallback_fit}"
         " --ring {params.ring} --max-rings {params.rings} {params.switches}"
         " --threads {threads} --out {output:q} --log {log:q}"

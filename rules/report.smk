@@ -7,6 +7,7 @@ rule summary:
         verify=expand(f"{RESULTS}/{{pose}}/verify.h5", pose=POSES),
         downstream=expand(f"{RESULTS}/{{pose}}/downstream.h5", pose=POSES),
         classify=expand(f"{RESULTS}/{{pose}}/classify.h5", pose=POSES),  # V_C of the baselines' deviations
+        keyframes=expand(f"{RESULTS}/{{pose}}/keyframes.h5", pose=POSES),  # reference and target: distortion
         baselines=[path for p in POSES for path in baseline_artifacts(p).values()],
         meshes=[repaired_file(p) for p in POSES],
     output:
@@ -16,6 +17,7 @@ rule summary:
         results=lambda wildcards, input: os.path.dirname(os.path.dirname(input.verify[0])),
         poses=",".join(POSES),
         baselines=f"--baselines {','.join(BASELINES)}" if BASELINES else "",
+        limit=config["summary"]["distortion_limit"],
         python=PYTHON,
         script=stage_script("summary"),
         code=stage_code("summary"),
@@ -24,7 +26,8 @@ rule summary:
         f"{RESULTS}/logs/summary.log",
     shell:
         "{params.python:q} {params.script:q} --results {params.results:q} --poses {params.poses:q}"
-        " {params.baselines} --out {output.json:q} --markdown {output.md:q} --log {log:q}"
+        " {params.baselines} --distortion-limit {params.limit} --out {output.json:q} --markdown {output.md:q}"
+        " --log {log:q}"
 
 
 rule render:

@@ -19,7 +19,7 @@ from posefix.pipeline.timings import Timings
 def build_parser():
     parser = stage_parser("export", __doc__)
     parser.add_argument("--artifact", required=True, help="verify.h5 (S0) or a baseline's artifact of the pose")
-    parser.add_argument("--stage", default="verify", choices=("verify", "repair_medial", "repair_volumetric"),
+    parser.add_argument("--stage", default="verify", choices=("verify", "repair_medial", "repair_volumetric", "repair_contact"),
                         help="the stage that wrote --artifact: its dataset 'repaired' is written")
     parser.add_argument("--reference", required=True,
                         help="the reference mesh file (its seams: vertices split there get one position again)")

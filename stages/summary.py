@@ -4,16 +4,20 @@ Reads the metrics of every pose's artifacts (``results/<library>/<pose>/*.h5``) 
 benchmark files, and writes ``reports/<library>/summary.json`` (schema in docs/artifacts.md) and
 ``summary.md`` (``posefix.report.summary``). With ``--baselines``, every pose's entry also compares
 the baseline repairs (``<pose>/<name>.h5``): their intersections, and their deviation from the
-target over S0's ``V_C`` (``classify.h5``) and the rest, measured as S0's.
+target over S0's ``V_C`` (``classify.h5``) and the rest, measured as S0's. Every repaired pose's distortion
+(worst edge-length and face-area ratios against the target and the reference, faces beyond
+``--distortion-limit`` against both) is measured here too (``posefix.mesh.distortion``).
 """
 
 import json
+from functools import partial
 from pathlib import Path
 
 import posefix.pipeline.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; runtime defaults before numpy)
 
 from posefix.pipeline.artifacts import read_artifact, read_baseline
-from posefix.pipeline.cli import run_stage, stage_parser
+from posefix.mesh.distortion import distortion_summary
+from posefix.pipeline.cli import library_defaults, run_stage, stage_parser
 from posefix.pipeline.errors import InputError
 from posefix.pipeline.files import atomic_write_bytes
 from posefix.pipeline.timings import benchmark_seconds
@@ -31,41 +35,51 @@ def build_parser():
     parser.add_argument("--markdown", required=True, help="summary.md to write")
     parser.add_argument("--baselines", default="",
                         help="comma-separated baseline repairs to compare (their <pose>/<name>.h5), e.g. medial")
+    parser.add_argument("--distortion-limit", type=float, default=library_defaults(distortion_summary)["limit"],
+                        help="a face whose edge-length or area ratio exceeds this against both the target and the "
+                        "reference is distorted (its pose is flagged 'check')")
     return parser
 
 
-def summarize_pose(results, pose, baselines=()):
-    """The summary entry of one pose, from its artifacts and benchmark files, with the ``baselines`` (names)."""
+def summarize_pose(results, pose, baselines=(), limit=4.0):
+    """The summary entry of one pose, from its artifacts and benchmark files, with the ``baselines`` (names);
+    ``limit``: the distortion limit."""
     folder = Path(results) / pose
     metrics = {stage: read_artifact(folder / f"{stage}.h5", stage, [])[1]["metrics"] for stage in METRICS}
+    shapes = read_artifact(folder / "keyframes.h5", "keyframes", ["reference", "target", "faces"])[0]
+    repaired = read_artifact(folder / "verify.h5", "verify", ["repaired"])[0]["repaired"]
+    measure = partial(distortion_summary, rests={"target": shapes["target"], "reference": shapes["reference"]},
+                      F=shapes["faces"], limit=limit)
     downstream, _ = read_artifact(folder / "downstream.h5", "downstream", list(DOWNSTREAM_DATASETS))
     seconds = {stage: benchmark_seconds(Path(results) / "benchmarks" / pose, stage) for stage in SUMMARY_STAGES}
     compared = {}
     if baselines:
         mask = read_artifact(folder / "classify.h5", "classify", ["mask"])[0]["mask"].astype(bool)
         d = float(metrics["keyframes"]["bbox_diagonal"])
-        compared = {name: summarize_baseline(folder / f"{name}.h5", name, mask, d, downstream) for name in baselines}
+        compared = {name: summarize_baseline(folder / f"{name}.h5", name, mask, d, downstream, measure)
+                    for name in baselines}
         for name, entry in compared.items():  # wall seconds of the stage, as S0's (the artifact's: in-process)
             wall = benchmark_seconds(Path(results) / "benchmarks" / pose, f"repair_{name}")
             entry["seconds"] = entry["seconds"] if wall is None else wall
-    return pose_entry(pose, metrics, downstream, seconds, compared)
+    return pose_entry(pose, metrics, downstream, seconds, compared, measure(repaired))
 
 
-def summarize_baseline(path, name, mask, d, downstream):
+def summarize_baseline(path, name, mask, d, downstream, measure):
     """``baselines.<name>`` of a pose's entry: the artifact's metrics, the deviation of its repaired pose from
-    its start (the target) over ``mask`` (V_C) and the rest relative to ``d``, the downstream runs towards it."""
+    its start (the target) over ``mask`` (V_C) and the rest relative to ``d``, the downstream runs towards it,
+    ``measure`` (its distortion summary) of the repaired pose."""
     data, attrs = read_baseline(path, name, ["start", "repaired"])
     if not data["start"].shape == data["repaired"].shape == (len(mask), 3):
         raise InputError(path, f"start {data['start'].shape} and repaired {data['repaired'].shape} are not "
                                f"({len(mask)}, 3) like the pose")
     _, summary = deviation(data["repaired"], data["start"], mask, d)
-    return baseline_entry(name, attrs["metrics"], summary, downstream)
+    return baseline_entry(name, attrs["metrics"], summary, downstream, measure(data["repaired"]))
 
 
 def main(args, log):
     poses = [p for p in args.poses.split(",") if p]
     baselines = [b for b in args.baselines.split(",") if b]
-    entries = [summarize_pose(args.results, pose, baselines) for pose in poses]
+    entries = [summarize_pose(args.results, pose, baselines, args.distortion_limit) for pose in poses]
     library = Path(args.results).name
     atomic_write_bytes(args.out, json.dumps({"library": library, "poses": entries}, indent=1).encode())
     atomic_write_bytes(args.markdown, summary_markdown(library, entries).encode())

@@ -1,11 +1,13 @@
-"""Stage verify: check the repaired pose and fall back to the target where integration could not help.
+"""Stage verify: finish the integrated pose (V_C onto its targets) and check the repaired pose.
 
-Counts intersecting faces of reference, target and repaired pose ("new": intersecting in the
-repaired pose, not in the reference), puts the constrained vertices exactly on their targets
-(blending the fit's residual into the rest), replaces regions by the target where integration
-could not reach it (S0 Fig. 9), untangles new intersections, and measures the deviation from the
-target over V_C and the rest (``posefix.repair.sequence.repair_pose``). Stage ``export`` writes
-the mesh.
+Two finishes (``--finish``). ``contact``: the contact solver (IPC) moves the integrated pose, V_C onto
+its targets and the rest toward its goal, and no intersection that the reference does not have can
+form (``posefix.repair.sequence.finish_pose``). ``snap``: puts the constrained vertices exactly on
+their targets (blending the fit's residual into the rest), replaces regions by the target where
+integration could not reach it (S0 Fig. 9) and untangles new intersections
+(``posefix.repair.sequence.repair_pose``). Both then count intersecting faces of reference, target
+and repaired pose ("new": intersecting in the repaired pose, not in the reference) and measure the
+deviation from the target over V_C and the rest. Stage ``export`` writes the mesh.
 """
 
 import json
@@ -13,11 +15,14 @@ from dataclasses import asdict
 
 import posefix.pipeline.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; runtime defaults before numpy)
 
+from posefix.mesh.contact_solver import ContactSolver
 from posefix.pipeline.artifacts import read_artifact, write_artifact
 from posefix.pipeline.cli import run_stage, stage_parser
+from posefix.pipeline.contact_options import add_contact_options, contact_settings
 from posefix.pipeline.timings import Timings
+from posefix.repair.contact_finish import FinishSettings
 from posefix.repair.flags import describe_flags
-from posefix.repair.sequence import RepairSettings, repair_pose
+from posefix.repair.sequence import RepairSettings, finish_pose, repair_pose
 from posefix.repair.state import RepairProblem
 from posefix.spacetime.classification import split_frames
 
@@ -40,6 +45,15 @@ def build_parser():
     parser.add_argument("--integrate", required=True, help="integrate.h5 of the pose")
     parser.add_argument("--fit", required=True, help="fit.h5 of the pose (eps)")
     parser.add_argument("--out", required=True, help="verify.h5 to write")
+    finish = FinishSettings()
+    parser.add_argument("--finish", choices=["contact", "snap"], default=defaults.finish,
+                        help="contact: the contact solver moves V_C onto its targets, no new intersection can form; "
+                        "snap: snap V_C, fall back to the target and untangle")
+    parser.add_argument("--free-goal", choices=["integrated", "target"], default=finish.free_goal,
+                        help="contact finish: goal of the free region (the integrated pose plus the blended V_C "
+                        "residual, or the target)")
+    parser.add_argument("--constrained-weight", type=float, default=finish.constrained_weight,
+                        help="contact finish: weight of V_C on its targets relative to the free region's")
     parser.add_argument("--fallback-eps", type=float, default=defaults.fallback_eps,
                         help="vertices farther than this many eps from their targets have not reached them")
     parser.add_argument("--fallback-fit", type=float, default=defaults.fallback_fit,
@@ -53,6 +67,7 @@ def build_parser():
                         help="do not replace regions with new intersections by the target")
     parser.add_argument("--no-reproduce", dest="reproduce", action="store_false",
                         help="keep the integrated positions of the constrained vertices (no snap to the target)")
+    add_contact_options(parser)
     return parser
 
 
@@ -61,23 +76,36 @@ def main(args, log):
     with timings.step("read"):
         kf, _ = read_artifact(args.keyframes, "keyframes", ["reference", "target", "faces"])
         cl, _ = read_artifact(args.classify, "classify", ["mask", "pairs", "pair_offsets"])
-        it, _ = read_artifact(args.integrate, "integrate", ["positions"])
+        it, _ = read_artifact(args.integrate, "integrate", ["positions", "samples"])
         _, fattrs = read_artifact(args.fit, "fit", [])
-    d = float(fattrs["metrics"]["bbox_diagonal"])
-    eps = json.loads(fattrs["config"])["eps_rel"] * d
     problem = RepairProblem.build(kf["reference"], kf["target"], kf["faces"], cl["mask"],
                                   split_frames(cl["pairs"], cl["pair_offsets"]))
-    settings = RepairSettings(args.fallback_eps, args.fallback_fit, args.ring, args.max_rings, args.repair_new,
-                              args.reproduce)
-    result = repair_pose(problem, it["positions"], d, eps, float(fattrs["metrics"]["max_error_rel"]), settings)
+    settings = RepairSettings(args.finish, args.fallback_eps, args.fallback_fit, args.ring, args.max_rings,
+                              args.repair_new, args.reproduce)
+    result, params = _finish(args, problem, it, fattrs, settings)
     timings.update(result.seconds)
     write_artifact(
         args.out, "verify",
         {"integrated_deviation": result.integrated_deviation, "repaired": result.X, "deviation": result.deviation,
          "replaced": result.replaced, "new_faces": result.new, "pairs": result.pairs},
-        params=asdict(settings),
+        params=params,
         inputs=[args.keyframes, args.classify, args.integrate, args.fit], timings=timings,
         metrics=result.metrics, docs=DOCS)
+
+
+def _finish(args, problem, integrated, fit_attrs, settings):
+    """(RepairResult, params) of the finish ``settings.finish`` of the integrated pose."""
+    d = float(fit_attrs["metrics"]["bbox_diagonal"])
+    if settings.finish == "snap":
+        eps = json.loads(fit_attrs["config"])["eps_rel"] * d
+        result = repair_pose(problem, integrated["positions"], d, eps, float(fit_attrs["metrics"]["max_error_rel"]),
+                             settings)
+        return result, asdict(settings)
+    contact, contact_params = contact_settings(args)
+    finish = FinishSettings(args.free_goal, args.constrained_weight)
+    solver = ContactSolver(problem.V_ref, problem.F, problem.reference_faces, contact, args.threads)
+    result = finish_pose(problem, integrated["samples"], d, solver, finish)
+    return result, {"finish": "contact"} | asdict(finish) | contact_params
 
 
 if __name__ == "__main__":

@@ -17,8 +17,11 @@ from conftest import ROOT
 from posefix.check.downstream import deform_towards, downstream_check
 from posefix.check.gauss_newton import SolverSettings
 from posefix.check.shells import shell_energy
+from posefix.mesh.contact_solver import ContactSettings
 from posefix.mesh.contacts import contact_vertices
+from posefix.mesh.distortion import distortion_summary
 from posefix.pipeline.demo import demo_library
+from posefix.repair.contact_finish import FinishSettings
 from posefix.repair.sequence import RepairSettings
 from posefix.skeletal.authoring import SkeletalPoser
 from posefix.skeletal.flow import MedialBallFlow, candidate_balls, medial_ball_flow, nearest_balls
@@ -71,6 +74,9 @@ LIBRARY = {
     ("integrate", "h0"): [(rk45, "h0", None), (rk45_opencl, "h0", None)],
     ("integrate", "vec"): [(rk45_opencl, "vec", lambda v: v or 0)],  # None and 0: the device's width
     **{("verify", f.name): [(RepairSettings, f.name, None)] for f in dataclasses.fields(RepairSettings)},
+    **{("verify", f.name): [(FinishSettings, f.name, None)] for f in dataclasses.fields(FinishSettings)},
+    **{("contact", f.name): [(ContactSettings, f.name, None)] for f in dataclasses.fields(ContactSettings)},
+    ("summary", "distortion_limit"): [(distortion_summary, "limit", None)],
     ("downstream", "alphas"): [(downstream_check, "alphas", list)],
     ("downstream", "k_bend"): [(downstream_check, "k_bend", list)],
     ("downstream", "k_stretch"): [(downstream_check, "k_stretch", None), (deform_towards, "k_stretch", None),
@@ -129,6 +135,10 @@ WORKFLOW_ONLY = {("demo", "folder"), ("classify", "exclude"), ("integrate", "dev
 repair_volumetric.tet_vertices goes to stage tet_mesh (its library default is checked in LIBRARY)."""
 
 
+SECTION_STAGES = {"contact": ["verify", "repair_contact"]}
+"""Config sections read by other stages than the one of their name."""
+
+
 def tunables():
     return [(s, k) for s, section in CONFIG.items() if isinstance(section, dict) for k in section]
 
@@ -158,10 +168,11 @@ def test_every_tunable_is_accounted_for():
 
 @pytest.mark.parametrize("section", sorted({s for s, _ in tunables()}))
 def test_stage_defaults_equal_the_config(section):
-    parser = _stage_parser(section)
-    for s, key in tunables():
-        if s == section and (s, key) not in WORKFLOW_ONLY - STAGE_ONLY:
-            assert parser.get_default(key) == CONFIG[s][key], f"stages/{section}.py --{key.replace('_', '-')}"
+    for stage in SECTION_STAGES.get(section, [section]):
+        parser = _stage_parser(stage)
+        for s, key in tunables():
+            if s == section and (s, key) not in WORKFLOW_ONLY - STAGE_ONLY:
+                assert parser.get_default(key) == CONFIG[s][key], f"stages/{stage}.py --{key.replace('_', '-')}"
 
 
 @pytest.mark.parametrize("key", sorted(LIBRARY), ids="{0[0]}.{0[1]}".format)

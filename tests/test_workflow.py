@@ -73,11 +73,11 @@ def test_demo_poses_are_repaired(demo_run):
         V, F2 = read_mesh(demo_run / "results" / "demo" / "repaired" / f"{pose.name}{pose.suffix}")
         assert np.array_equal(F, F2) and V.shape == V_tgt.shape
     markdown = (demo_run / "reports" / "demo" / "summary.md").read_text()
-    # the repair table, the downstream table and S0 vs the baseline repairs (config baselines: [medial, volumetric])
+    # the repair table, the downstream table and S0 vs the baseline repairs (config baselines)
     assert markdown.count("| demo-") == 3 * len(POSES) and "## S0 vs the baseline repairs" in markdown
 
 
-@pytest.mark.parametrize("name", ["medial", "volumetric"])
+@pytest.mark.parametrize("name", ["medial", "volumetric", "contact"])
 def test_the_report_compares_s0_with_the_baseline_repairs(demo_run, name):
     """summary.json's baselines.<name>: the artifact's numbers and its deviation over S0's V_C, measured as
     S0's; renders.png has a panel per baseline."""
@@ -105,12 +105,14 @@ def test_the_report_compares_s0_with_the_baseline_repairs(demo_run, name):
                 free = fh["free"][()]
                 assert np.array_equal(fh["repaired"][()][~free], kf["target"][()][~free])
                 assert free[~cl["mask"][()]].all()
+            if name == "contact":  # no new intersection, by construction
+                assert baseline["intersecting_faces"]["repaired_new"] == 0 and not fh["new_faces"][()].any()
         assert baseline["deviation"] == pytest.approx(dev) and "downstream" not in baseline  # downstream.baselines
         figures = demo_run / "reports" / "demo" / "figures" / e["pose"]
         renders, deviation_map = imread(figures / "renders.png"), imread(figures / "deviation.png")
-        assert renders.shape[1] == 2 * deviation_map.shape[1]  # four panels of 5 inches, two of 5
+        assert 2 * renders.shape[1] == 5 * deviation_map.shape[1]  # five panels of 5 inches, two of 5
     page = (demo_run / "reports" / "demo" / "summary.html").read_text()
-    assert "<th>new faces S0 / medial / volumetric</th>" in page
+    assert "<th>new faces S0 / medial / volumetric / contact</th>" in page
 
 
 def test_baselines_reach_the_report_and_the_check(tmp_path):
@@ -119,15 +121,16 @@ def test_baselines_reach_the_report_and_the_check(tmp_path):
     proc = snakemake(tmp_path, "-n", "-p", "--config", "poses=demo-01", "downstream={'baselines': True}")
     assert proc.returncode == 0, proc.stderr[-2000:]
     commands = [line for line in (proc.stdout + proc.stderr).splitlines() if "stages/" in line]
-    for name in ("medial", "volumetric"):
+    for name in ("medial", "volumetric", "contact"):
         option = f"--baseline {name}=results/demo/demo-01/{name}.h5"
         for stage in ("render", "downstream"):
             assert sum(f"stages/{stage}.py" in c and option in c for c in commands) == 1, (stage, name)
-    assert any("stages/summary.py" in c and "--baselines medial,volumetric" in c for c in commands)
+    assert any("stages/summary.py" in c and "--baselines medial,volumetric,contact" in c for c in commands)
     proc = snakemake(tmp_path, "-n", "-p", "--config", "poses=demo-01", "baselines=[]")
     assert proc.returncode == 0, proc.stderr[-2000:]
     commands = [line for line in (proc.stdout + proc.stderr).splitlines() if "stages/" in line]
-    assert len(commands) > 10 and not any("--baseline" in c or "medial" in c or "volumetric" in c for c in commands)
+    assert len(commands) > 10 and not any("--baseline" in c or "medial" in c or "volumetric" in c
+                                          or "repair_contact" in c for c in commands)
 
 
 def test_report_has_every_section_and_non_blank_figures(demo_run):

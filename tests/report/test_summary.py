@@ -124,10 +124,12 @@ def _results(folder, medial=True):
     pose = folder / "p-01"
     pose.mkdir(parents=True)
     write = {"params": {}, "inputs": [], "timings": {}}
-    for stage, metrics in _metrics().items():
-        write_artifact(pose / f"{stage}.h5", stage, {}, metrics=metrics, **write)
-    write_artifact(pose / "downstream.h5", "downstream", _downstream(medial), **write)
     start, repaired, mask = _displaced()
+    faces = np.array([[0, 1, 2], [3, 4, 5]])
+    shapes = {"keyframes": {"reference": start, "target": start, "faces": faces}, "verify": {"repaired": start}}
+    for stage, metrics in _metrics().items():
+        write_artifact(pose / f"{stage}.h5", stage, shapes.get(stage, {}), metrics=metrics, **write)
+    write_artifact(pose / "downstream.h5", "downstream", _downstream(medial), **write)
     write_artifact(pose / "classify.h5", "classify", {"mask": mask}, **write)
     write_artifact(pose / "medial.h5", "repair_medial", {"start": start, "repaired": repaired},
                    metrics=_baseline_metrics(), **write)
@@ -151,6 +153,9 @@ def test_summary_and_overview_stages_compare_the_baseline(tmp_path):
     assert medial["deviation"]["constrained_max"] == pytest.approx(0.01)  # 0.02 / d = 2 (keyframes' diagonal)
     assert medial["deviation"]["free_max"] == pytest.approx(0.2) and medial["seconds"] == 2.5
     assert medial["downstream"]["alphas"]["1"]["medial"]["converged"] == [True, False]
+    assert entry["distortion"] == {"edge_target": 1.0, "area_target": 1.0, "edge_reference": 1.0,
+                                   "area_reference": 1.0, "faces_over": 0, "limit": 4.0}  # S0's repair: the target
+    assert medial["distortion"]["edge_target"] > 1.0 and medial["distortion"]["limit"] == 4.0
     assert "| p-01 | 1 / 5 | 0.001 / 0.01 |" in (out / "s.md").read_text()
     assert "S0 vs the baseline" not in (out / "plain.md").read_text()
     run_stage("overview", "--summary", out / "s.json", "--png", out / "o.png", "--html", out / "o.html")

@@ -23,6 +23,10 @@ def test_pose_status_flags_what_needs_a_look():
     assert kind == "check" and "2 new intersecting faces" in reason
     kind, reason = pose_status(_entry("d", vc_max=8e-3))
     assert kind == "check" and "V_C max deviation" in reason
+    stretched = {**_entry("e"), "distortion": {"edge_target": 11.9, "area_target": 5.0, "edge_reference": 11.0,
+                                               "area_reference": 4.5, "faces_over": 38, "limit": 4.0}}
+    kind, reason = pose_status(stretched)  # no new intersection, yet not ok
+    assert kind == "check" and reason == "38 faces stretched or crushed beyond 4x"
     page = summary_html("lib <x>", [_entry("a"), _entry("c", new=6, inside=4)])
     assert page.count("<tr style=") == 2 and "lib &lt;x&gt;" in page and "1 ok, 0 fallback, 1 check" in page
     assert pixels(figures.library_overview([_entry("a"), _entry("c", new=6, inside=4)])).var() > 0
@@ -68,14 +72,19 @@ def test_the_comparison_puts_s0_and_the_baseline_side_by_side():
     a = _with_medial(_entry("a", new=2), new=7, vc_max=2e-2, seconds=3.25)
     assert compared_repairs(a, ["medial"]) == {
         "S0": {"new": 2, "constrained_mean": 1e-4, "constrained_max": 1e-3, "free_max": 5e-2, "seconds": 6.0,
-               "converged": None},  # S0's seconds: its stages keyframes to verify (fit 5 + integrate 1)
+               "converged": None, "edge": None, "distorted": None},  # S0's seconds: keyframes to verify (5 + 1)
         "medial": {"new": 7, "constrained_mean": 1e-2, "constrained_max": 2e-2, "free_max": 0.3, "seconds": 3.25,
-                   "converged": None}}
+                   "converged": None, "edge": None, "distorted": None}}
     header, rows = comparison_table([a])
     assert header == ["pose", "new faces S0 / medial", "V_C dev. mean S0 / medial", "V_C dev. max S0 / medial",
                       "free dev. max S0 / medial", "seconds S0 / medial"]  # no GN column without the check
     assert rows == [["a", "2 / 7", "0.0001 / 0.01", "0.001 / 0.02", "0.05 / 0.3", "6.0 / 3.2"]]
     assert comparison_table([_entry("a")]) == ([], [])
+    measured = {"edge_target": 2.5, "area_target": 3.0, "edge_reference": 2.0, "area_reference": 2.0, "limit": 4.0}
+    a["distortion"], a["baselines"]["medial"]["distortion"] = measured | {"faces_over": 0}, measured | {"faces_over": 3}
+    header, rows = comparison_table([a])
+    assert header[5:7] == ["worst edge ratio S0 / medial", "distorted faces S0 / medial"]
+    assert rows[0][5:7] == ["2.5 / 2.5", "0 / 3"]
     page = summary_html("lib", [a])
     assert "<h3>S0 vs the baseline repairs</h3>" in page and "<td>2 / 7</td>" in page
     assert "GN converged" not in page.split("<h3>")[1]  # neither as a column nor in the note

@@ -15,10 +15,13 @@ contact's push over about the smoothing length ``l``, and a rigid motion of the 
 The reference may intersect itself. Its intersecting faces are *tolerated*: a primitive pair whose
 every incident face is tolerated is removed from the broad phase's candidates before the barrier and
 the CCD see them (an intersection it may form involves tolerated faces only), and no other pair is:
-a face that does not intersect in the reference never comes to intersect anything. (A vertex-pair
-filter such as ``ipctk``'s ``can_collide`` would silence every primitive that shares such a vertex.)
+a face that does not intersect in the reference never comes to intersect anything. ``ipctk``'s vertex
+filter alone would silence every pair whose vertices all belong to tolerated faces (a primitive next to
+them too), so the region's own broad phase gives those pairs back, less the tolerated ones: the Python
+work is the tolerated region's, not the mesh's.
 
-:class:`ContactSolver` precomputes per reference; :meth:`ContactSolver.compute_pose` moves one pose.
+:class:`ContactSolver` precomputes per reference; :meth:`ContactSolver.compute_pose` moves one pose toward its
+goals, :meth:`ContactSolver.compute_path` carries one through a sequence of poses (key frames, path-line samples).
 """
 
 import logging
@@ -40,6 +43,9 @@ _PSD = ipctk.PSDProjectionMethod.CLAMP
 _CCD = ipctk.TightInclusionCCD(1e-6, 1000)
 """Tight-Inclusion CCD; past 1000 iterations it returns its conservative lower bound of the time of impact
 (the default, 1e7 iterations, spent 10-15 s on one step of two touching spheres for no real gain)."""
+
+WAYPOINT_TOLERANCE = 1e-3
+"""Newton's stopping step / d on the waypoints of :meth:`ContactSolver.compute_path` (all but the last)."""
 
 
 @dataclass(frozen=True)
@@ -64,7 +70,7 @@ class ContactSettings:
     dhat: float = 2e-4
     touching: float = 1e-9
     smoothing: float = 0.02
-    tolerance: float = 1e-5
+    tolerance: float = 1e-4
     max_iterations: int = 200
 
 
@@ -163,23 +169,60 @@ class ContactSolver:
         ipctk.set_logger_level(ipctk.LoggerLevel.warn)
         V_ref = np.asarray(V_ref, dtype=np.float64)
         self.F, self.d, self.settings = np.asarray(F, dtype=np.int32), bbox_diagonal(V_ref), settings
+        self.dhat = settings.dhat * self.d
         E = ipctk.edges(self.F)
         self.mesh = ipctk.CollisionMesh(V_ref, E, self.F)
         tolerated = np.zeros(len(F), dtype=bool) if tolerated_faces is None else np.asarray(tolerated_faces, bool)
         self.tolerated = tolerated_primitives(self.F, E, self.mesh.faces_to_edges, tolerated, len(V_ref))
         self._touching = (np.zeros(0, np.int64), np.zeros(0, np.int64))
-        distances = self._candidate_distances(self.candidates(V_ref, inflation=settings.dhat * self.d), V_ref)
-        touching = [keys[dist < settings.touching * self.d] for keys, dist in distances]
-        self._touching = tuple(np.unique(k) for k in touching)
-        apart = np.concatenate([dist[dist >= settings.touching * self.d] for _, dist in distances])
-        self.clearance = float(apart.min()) if len(apart) else settings.dhat * self.d
-        self.dhat = settings.dhat * self.d
+        self._touching, self.clearance = self._touching_pairs(V_ref)
+        self._sub = self._tolerated_region(V_ref, E)
         self.barrier = ipctk.BarrierPotential(self.dhat, 1.0)
         self._smoothness = _smoothness(V_ref, self.F, settings.smoothing * self.d)
         self._order = fill_reducing_order(sp.kron(self._smoothness[1] + sp.identity(len(V_ref)), np.ones((3, 3))))
         log.info("contact solver: %d vertices, %d tolerated faces and %d pairs touching at rest, clearance %.2e d, "
                  "dhat %.2e d", len(V_ref), int(tolerated.sum()), sum(len(k) for k in self._touching),
                  self.clearance / self.d, self.dhat / self.d)
+
+    def _touching_pairs(self, V):
+        """((edge-pair keys, face-vertex keys) of the non-tolerated pairs closer than ``touching * d`` at ``V``, the
+        smallest distance of the others below ``dhat``, or ``dhat``): before the broad phase's filter is set."""
+        c = ipctk.Candidates()
+        c.build(self.mesh, V, self.dhat)
+        (ee, ee_keys), (fv, fv_keys) = self._pairs(c)
+        keep_ee, keep_fv = self._kept(ee, ee_keys, fv, fv_keys)
+        E, F = self.mesh.edges, self.mesh.faces
+        ee_dist = np.sqrt([k.compute_distance(V, E, F) for k, keep in zip(c.ee_candidates, keep_ee) if keep])
+        fv_dist = np.sqrt([k.compute_distance(V, E, F) for k, keep in zip(c.fv_candidates, keep_fv) if keep])
+        limit = self.settings.touching * self.d
+        touching = (np.unique(ee_keys[keep_ee][ee_dist < limit]), np.unique(fv_keys[keep_fv][fv_dist < limit]))
+        apart = np.concatenate([ee_dist[ee_dist >= limit], fv_dist[fv_dist >= limit]])
+        return touching, float(apart.min()) if len(apart) else self.dhat
+
+    def _tolerated_region(self, V, E):
+        """Set the broad phase's filter and return the tolerated region's own collision mesh (None if none).
+
+        ipctk's vertex filter (``make_vertex_patches_filter``) drops every pair of primitives whose vertices all lie
+        in the region (the tolerated faces' and touching pairs' vertices); :meth:`candidates` adds back those of them
+        that are not tolerated, from the broad phase of the region's own mesh: ``(mesh, vertices (r,), edges (e_r,),
+        faces (f_r,))``, the last three the region's primitives' ids in the whole mesh."""
+        region = np.zeros(len(V), dtype=bool)
+        region[self.F[self.tolerated[2]].ravel()] = True
+        n, ne = len(V), len(E)
+        touching_ee, touching_fv = self._touching
+        region[E[np.concatenate([touching_ee // ne, touching_ee % ne])].ravel()] = True
+        region[self.F[touching_fv // n].ravel()] = True
+        region[touching_fv % n] = True
+        if not region.any():
+            return None
+        self.mesh.can_collide = ipctk.make_vertex_patches_filter(np.where(region, 0, np.arange(1, n + 1)).astype(np.int32))
+        vertices = np.flatnonzero(region)
+        local = np.full(n, -1, dtype=np.int32)
+        local[vertices] = np.arange(len(vertices))
+        edges = np.flatnonzero(region[E].all(axis=1))
+        faces = np.flatnonzero(region[self.F].all(axis=1))
+        mesh = ipctk.CollisionMesh(V[vertices], local[E[edges]], local[self.F[faces]])
+        return mesh, vertices, edges, faces
 
     def candidates(self, X0, X1=None, inflation=None):
         """The broad phase's primitive pairs near ``X0`` (or swept from ``X0`` to ``X1``), tolerated pairs removed.
@@ -194,35 +237,43 @@ class ContactSolver:
         -------
         ipctk.Candidates
         """
-        c = ipctk.Candidates()
+        X1 = X0 if X1 is None else X1
         inflation = self.dhat if inflation is None else inflation
-        if X1 is None:
-            c.build(self.mesh, X0, inflation)
-        else:
-            c.build(self.mesh, X0, X1, inflation)
-        v_ok, e_ok, f_ok = self.tolerated
-        (ee, ee_keys), (fv, fv_keys) = self._pairs(c)
-        drop = (e_ok[ee[:, 0]] & e_ok[ee[:, 1]]) | np.isin(ee_keys, self._touching[0])
-        c.ee_candidates = [k for k, out in zip(c.ee_candidates, drop) if not out]
-        drop = (f_ok[fv[:, 0]] & v_ok[fv[:, 1]]) | np.isin(fv_keys, self._touching[1])
-        c.fv_candidates = [k for k, out in zip(c.fv_candidates, drop) if not out]
+        c = ipctk.Candidates()
+        c.build(self.mesh, X0, X1, inflation)
+        if self._sub is None:
+            return c
+        mesh, vertices, edges, faces = self._sub
+        region = ipctk.Candidates()
+        region.build(mesh, X0[vertices], X1[vertices], inflation)
+        (ee, _), (fv, _) = self._pairs(region)
+        ee, fv = edges[ee], np.column_stack([faces[fv[:, 0]], vertices[fv[:, 1]]])
+        ee_keys, fv_keys = self._keys(ee, fv)
+        keep_ee, keep_fv = self._kept(ee, ee_keys, fv, fv_keys)
+        if keep_ee.any():
+            c.ee_candidates = c.ee_candidates + [ipctk.EdgeEdgeCandidate(int(a), int(b)) for a, b in ee[keep_ee]]
+        if keep_fv.any():
+            c.fv_candidates = c.fv_candidates + [ipctk.FaceVertexCandidate(int(f), int(v)) for f, v in fv[keep_fv]]
         return c
 
+    def _kept(self, ee, ee_keys, fv, fv_keys):
+        """Masks of the edge-edge pairs (k, 2) and face-vertex pairs (l, 2) that are neither tolerated nor touching."""
+        v_ok, e_ok, f_ok = self.tolerated
+        keep_ee = ~((e_ok[ee[:, 0]] & e_ok[ee[:, 1]]) | np.isin(ee_keys, self._touching[0]))
+        keep_fv = ~((f_ok[fv[:, 0]] & v_ok[fv[:, 1]]) | np.isin(fv_keys, self._touching[1]))
+        return keep_ee, keep_fv
+
     def _pairs(self, c):
-        """((edge pairs (k, 2), keys (k,)), (face-vertex pairs (l, 2), keys (l,))) of the candidates ``c``, int64:
-        one key per unordered edge pair and per face-vertex pair."""
+        """((edge pairs (k, 2), keys (k,)), (face-vertex pairs (l, 2), keys (l,))) of the candidates ``c``, int64."""
         ee = np.array([(k.edge0_id, k.edge1_id) for k in c.ee_candidates], dtype=np.int64).reshape(-1, 2)
         fv = np.array([(k.face_id, k.vertex_id) for k in c.fv_candidates], dtype=np.int64).reshape(-1, 2)
-        ne, n = self.mesh.num_edges, self.mesh.num_vertices
-        return (ee, ee.min(axis=1) * ne + ee.max(axis=1)), (fv, fv[:, 0] * n + fv[:, 1])
+        ee_keys, fv_keys = self._keys(ee, fv)
+        return (ee, ee_keys), (fv, fv_keys)
 
-    def _candidate_distances(self, c, X):
-        """(keys, distances) of the edge-edge and of the face-vertex candidates of ``c`` at ``X`` (length units)."""
-        E, F = self.mesh.edges, self.mesh.faces
-        (_, ee_keys), (_, fv_keys) = self._pairs(c)
-        ee = np.array([k.compute_distance(X, E, F) for k in c.ee_candidates], dtype=np.float64)
-        fv = np.array([k.compute_distance(X, E, F) for k in c.fv_candidates], dtype=np.float64)
-        return (ee_keys, np.sqrt(ee)), (fv_keys, np.sqrt(fv))
+    def _keys(self, ee, fv):
+        """One int64 key per unordered edge pair of ``ee`` (k, 2) and per face-vertex pair of ``fv`` (l, 2)."""
+        ne, n = self.mesh.num_edges, self.mesh.num_vertices
+        return ee.min(axis=1) * ne + ee.max(axis=1), fv[:, 0] * n + fv[:, 1]
 
     def collisions(self, X, candidates=None):
         """The barrier's active pairs (closer than ``dhat``) at ``X``, tolerated pairs excluded (ipctk.NormalCollisions)."""
@@ -274,6 +325,34 @@ class ContactSolver:
         return ContactResult(X, converged, iterations, self.contact_vertices(C, len(X)), self.min_distance(X, C),
                              time.perf_counter() - t0)
 
+    def compute_path(self, start, waypoints, tolerance=None):
+        """Carry ``start`` through ``waypoints`` in turn (uniform weights), each from where the last one stopped.
+
+        Parameters
+        ----------
+        start : (n, 3) float
+            Intersection-free positions (see :meth:`compute_pose`).
+        waypoints : (K, n, 3) float
+            The poses to follow, K >= 1; all but the last are solved to :data:`WAYPOINT_TOLERANCE` only.
+        tolerance : float, optional
+            Newton's stopping step / d on the last waypoint (``settings.tolerance`` by default).
+
+        Returns
+        -------
+        ContactResult
+            At the last waypoint; ``iterations`` and ``seconds`` of the whole path, ``converged`` of every step.
+        """
+        X, uniform = np.asarray(start, dtype=np.float64), np.ones(len(start))
+        iterations, converged, seconds = 0, True, 0.0
+        for k, goal in enumerate(waypoints):
+            last = k == len(waypoints) - 1
+            result = self.compute_pose(X, goal, uniform, tolerance if last else WAYPOINT_TOLERANCE)
+            X, iterations, seconds = result.X, iterations + result.iterations, seconds + result.seconds
+            converged &= result.converged
+            log.debug("waypoint %d of %d: %d Newton iterations", k + 1, len(waypoints), result.iterations)
+        result.iterations, result.converged, result.seconds = iterations, converged, seconds
+        return result
+
 
 def _smoothness(V, F, length):
     """Vertex areas over their mean (n,) and the smoothness matrix ``l^4 L^T M^-1 L / mean area`` (n, n)."""
@@ -307,14 +386,14 @@ class _Newton:
         previous = s.min_distance(X, C)
         for it in range(1, s.settings.max_iterations + 1):
             dx = self._direction(X, C)
-            if np.abs(dx).max() <= self.tolerance * s.d:
-                return X, True, it - 1
             X_new, C_new, ok = self._line_search(X, dx, C)
             if not ok:
-                return X, False, it
-            log.debug("newton %d: step %.2e d (%.3g of Newton's), %d active pairs, kappa %.2e", it,
-                      np.abs(X_new - X).max() / s.d, np.abs(X_new - X).max() / np.abs(dx).max(), len(C_new), self.kappa)
+                return X, np.abs(dx).max() <= self.tolerance * s.d, it
+            log.debug("newton %d: step %.2e d (Newton's %.2e d), %d active pairs, kappa %.2e", it,
+                      np.abs(X_new - X).max() / s.d, np.abs(dx).max() / s.d, len(C_new), self.kappa)
             X, C = X_new, C_new
+            if np.abs(dx).max() <= self.tolerance * s.d:
+                return X, True, it
             current = s.min_distance(X, C)
             if np.isfinite(current):
                 self.kappa = ipctk.update_barrier_stiffness(previous ** 2 if np.isfinite(previous) else s.dhat ** 2,
@@ -349,7 +428,9 @@ class _Newton:
         s = self.s
         target = X + dx
         candidates = s.candidates(X, target)
-        alpha = candidates.compute_collision_free_stepsize(s.mesh, X, target, 0.0, _CCD) if not candidates.empty() else 1.0
+        alpha = 1.0
+        if not candidates.empty():
+            alpha = candidates.compute_collision_free_stepsize(s.mesh, X, target, 0.0, _CCD)
         e0 = self.energy(X, C)
         while alpha > 1e-12:
             X_new = X + alpha * dx

@@ -16,6 +16,7 @@ RIGID_REFERENCE = 8
 REPRODUCED = 16
 PUSHED = 32
 SEPARATED = 64
+CONTACT = 128
 
 
 @dataclass(frozen=True)
@@ -43,11 +44,14 @@ FLAGS = (
     Flag(SEPARATED, "separated",
          "separated (moved apart from a face it newly intersects, along the axis that separates the two in the "
          "reference)"),
+    Flag(CONTACT, "held by a contact",
+         "held by a contact (the contact finish's barrier holds the vertex off its goal: it is closer than dhat to a "
+         "part it does not touch in the reference)"),
 )
 """Every flag, in bit order."""
 
-SNAP = REPRODUCED | PUSHED
-"""Flags of the snap of ``V_C`` onto the target (not a fallback)."""
+SNAP = REPRODUCED | PUSHED | CONTACT
+"""Flags of the finish that puts ``V_C`` onto the target, by the snap or by the contact solver (not a fallback)."""
 UNTANGLED = REPLACED_NEW_INTERSECTION | SMOOTHED | RIGID_REFERENCE | SEPARATED
 """Flags of the new-intersection remedies."""
 

@@ -1,4 +1,9 @@
-"""The repair of one integrated pose, as stage ``verify`` runs it: snap, fallback, snap again, verify.
+"""The repair of one integrated pose, as stage ``verify`` runs it: a finish that puts ``V_C`` on its targets,
+then the verification.
+
+Two finishes (config ``verify.finish``): ``contact`` (:func:`finish_pose`, :mod:`posefix.repair.contact_finish`:
+the contact solver moves the integrated pose, and no new intersection can form) and ``snap``
+(:func:`repair_pose`: snap, fallback, snap again):
 
 1. **Snap** (:mod:`posefix.repair.reproduce`): constrained vertices within ``reach`` of their
    targets, ``reach = max(threshold, fallback_fit * fit max error)``, are put exactly on them;
@@ -19,9 +24,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from posefix.mesh.intersections import intersecting_faces, self_intersecting_pairs
+from posefix.repair.contact_finish import FinishSettings, contact_finish
 from posefix.repair.deviation import deviation
 from posefix.repair.fallback import fallback
-from posefix.repair.flags import PUSHED, REPRODUCED, flag_counts
+from posefix.repair.flags import CONTACT, PUSHED, REPRODUCED, flag_counts
 from posefix.repair.reproduce import reproduce_targets
 
 log = logging.getLogger(__name__)
@@ -33,6 +39,8 @@ class RepairSettings:
 
     Attributes
     ----------
+    finish : str
+        ``snap`` (this sequence) or ``contact`` (:func:`finish_pose`; the other fields do not apply).
     fallback_eps : float
         Constrained vertices farther than ``fallback_eps * eps`` from their targets (after the
         snap) did not reach them: pass-through triggers.
@@ -49,6 +57,7 @@ class RepairSettings:
         Snap; False keeps the integrated positions of ``V_C``.
     """
 
+    finish: str = "snap"
     fallback_eps: float = 100.0
     fallback_fit: float = 2.0
     ring: int = 1
@@ -76,7 +85,7 @@ class RepairResult:
     summary, integrated : dict
         Their summaries (:func:`posefix.repair.deviation.deviation`).
     seconds : dict
-        Wall seconds of ``reproduce`` (both snaps), ``fallback`` and ``verify``.
+        Wall seconds of ``reproduce`` (both snaps) and ``fallback``, or ``contact``; and ``verify``.
     metrics : dict
         The scalar results of ``verify.h5`` (``docs/artifacts.md``).
     """
@@ -125,12 +134,48 @@ def repair_pose(problem, X, d, eps, fit_max_error_rel, settings=RepairSettings()
     X, replaced = _snap(problem, X, replaced, reach, settings)
     replaced |= reproduced
     t3 = time.perf_counter()
+    seconds = {"reproduce": (t1 - t0) + (t3 - t2), "fallback": t2 - t1}
+    return _verified(problem, X, replaced, (integrated_dev, integrated), d, seconds)
+
+
+def finish_pose(problem, samples, d, solver, settings=FinishSettings()):
+    """Repair an integrated pose with the contact finish and verify the result.
+
+    Parameters
+    ----------
+    problem : posefix.repair.state.RepairProblem
+    samples : (S, n, 3) float
+        The integrated path lines at their sample times, the integrated pose last.
+    d : float
+        The reference's bounding-box diagonal (deviations are relative to it).
+    solver : posefix.mesh.contact_solver.ContactSolver
+        Built on the reference with its intersecting faces tolerated.
+    settings : FinishSettings
+
+    Returns
+    -------
+    RepairResult
+        Flags: ``REPRODUCED`` on the constrained vertices exactly on their targets, ``CONTACT`` on the vertices
+        a contact holds off their goals; the metrics add the finish's (:func:`contact_finish`).
+    """
+    integrated = deviation(samples[-1], problem.V_tgt, problem.mask, d)
+    finish = contact_finish(problem, solver, samples, settings)
+    replaced = finish.exact * np.uint8(REPRODUCED) | finish.contact * np.uint8(CONTACT)
+    result = _verified(problem, finish.X, replaced, integrated, d, {"contact": finish.metrics["contact_seconds"]})
+    result.metrics |= {k: v for k, v in finish.metrics.items() if k != "contact_seconds"}
+    return result
+
+
+def _verified(problem, X, replaced, integrated, d, seconds):
+    """The :class:`RepairResult` of a finished pose ``X`` with its flags; ``integrated``: the integrated pose's
+    (deviation, summary); ``seconds``: the finish's, ``verify`` added."""
+    t0 = time.perf_counter()
     pairs = self_intersecting_pairs(X, problem.F)
     faces = intersecting_faces(pairs, len(problem.F))
     dev, summary = deviation(X, problem.V_tgt, problem.mask, d)
-    seconds = {"reproduce": (t1 - t0) + (t3 - t2), "fallback": t2 - t1, "verify": time.perf_counter() - t3}
-    result = RepairResult(X, replaced, pairs, faces, faces & ~problem.reference_faces, dev, integrated_dev,
-                          summary, integrated, seconds)
+    seconds = seconds | {"verify": time.perf_counter() - t0}
+    result = RepairResult(X, replaced, pairs, faces, faces & ~problem.reference_faces, dev, integrated[0],
+                          summary, integrated[1], seconds)
     result.metrics = _metrics(result, problem)
     _log_result(result)
     return result
@@ -160,8 +205,8 @@ def _metrics(r, problem):
 
 
 def _log_result(result):
-    m, t = result.metrics, result.seconds
-    log.info("reproduce %.3f s, fallback %.3f s, verify %.3f s", t["reproduce"], t["fallback"], t["verify"])
+    m = result.metrics
+    log.info("%s", ", ".join(f"{k} {v:.3f} s" for k, v in result.seconds.items()))
     log.info("intersecting faces: reference %d, target %d, repaired %d (new %d); %d vertices changed by the fallback",
              m["intersecting_faces_reference"], m["intersecting_faces_target"], m["intersecting_faces_repaired"],
              m["repaired_new"], m["fallback_vertices"])

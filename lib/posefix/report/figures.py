@@ -11,14 +11,14 @@ from matplotlib.colors import to_rgb
 from matplotlib.figure import Figure
 from matplotlib.patches import Patch
 
-from posefix.repair.flags import (FLAGS, PUSHED, REPLACED_NEW_INTERSECTION, REPLACED_PASS_THROUGH, RIGID_REFERENCE,
-                                  SEPARATED, SMOOTHED)
+from posefix.repair.flags import (CONTACT, FLAGS, PUSHED, REPLACED_NEW_INTERSECTION, REPLACED_PASS_THROUGH,
+                                  RIGID_REFERENCE, SEPARATED, SMOOTHED)
 from posefix.report.rasterizer import HIGHLIGHT, SECONDARY, draw_mesh, face_values, heat_colors, view_limits
 from posefix.report.tables import baseline_names, converged_runs, downstream_counts
 
 DPI = 110
 FLAG_COLORS = {REPLACED_PASS_THROUGH: "tab:red", REPLACED_NEW_INTERSECTION: "tab:orange", SMOOTHED: "tab:green",
-               RIGID_REFERENCE: "tab:purple", PUSHED: "tab:blue", SEPARATED: "tab:brown"}
+               RIGID_REFERENCE: "tab:purple", PUSHED: "tab:blue", SEPARATED: "tab:brown", CONTACT: "tab:cyan"}
 """Colour of the vertices of each flag in the deviation figure (the snap's ``REPRODUCED`` is not drawn)."""
 EXAMPLE_STYLES = {"original": "--", "repaired": "-"}
 """Line style of the downstream runs per example; the baselines' are dotted."""

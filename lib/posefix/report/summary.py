@@ -16,7 +16,7 @@ SUMMARY_STAGES = ("keyframes", "classify", "constraints", "fit", "integrate", "v
 """Stages whose wall seconds a summary entry adds up (``seconds_stages``)."""
 
 
-def pose_entry(pose, metrics, downstream, seconds, baselines=None):
+def pose_entry(pose, metrics, downstream, seconds, baselines=None, distortion=None):
     """The summary entry of one pose.
 
     Parameters
@@ -31,6 +31,9 @@ def pose_entry(pose, metrics, downstream, seconds, baselines=None):
         Wall seconds per stage of :data:`SUMMARY_STAGES` (None where unknown).
     baselines : dict of str -> dict, optional
         :func:`baseline_entry` per baseline repair of the pose (key ``baselines``; none: no key).
+    distortion : dict, optional
+        :func:`posefix.mesh.distortion.distortion_summary` of the repaired pose against the target and the
+        reference (key ``distortion``; none: no key).
 
     Returns
     -------
@@ -57,13 +60,14 @@ def pose_entry(pose, metrics, downstream, seconds, baselines=None):
                      "new_intersection": int(ve["fallback_new_intersection"]),
                      "reproduced": int(ve["reproduced_vertices"]), "pushed": int(ve["pushed_vertices"])},
         "downstream": downstream_entry(downstream),
+        **({"distortion": distortion} if distortion else {}),
         **({"baselines": baselines} if baselines else {}),
         "seconds_stages": seconds,
         "seconds_total": sum(v for v in seconds.values() if v is not None),
     }
 
 
-def baseline_entry(name, metrics, deviation, downstream):
+def baseline_entry(name, metrics, deviation, downstream, distortion=None):
     """The summary of one baseline repair of a pose (``baselines.<name>`` of its entry).
 
     Parameters
@@ -78,6 +82,8 @@ def baseline_entry(name, metrics, deviation, downstream):
     downstream : dict of str -> ndarray
         Datasets of ``downstream.h5``; the entry gets a ``downstream`` like S0's (:func:`downstream_entry`)
         when the check ran towards the baseline.
+    distortion : dict, optional
+        As :func:`pose_entry`'s, of the baseline's repaired pose.
 
     Returns
     -------
@@ -87,6 +93,8 @@ def baseline_entry(name, metrics, deviation, downstream):
                                     "repaired_new": int(metrics["intersecting_faces_repaired_new"])},
              "deviation": {k: float(deviation[k]) for k in DEVIATIONS},
              "iterations": int(metrics["iterations"]), "seconds": float(metrics["seconds"])}
+    if distortion:
+        entry["distortion"] = distortion
     if name in example_names(downstream):
         entry["downstream"] = downstream_entry(downstream, (name,))
     return entry

@@ -12,8 +12,9 @@ STATUS_COLORS = {"ok": "#d8f0d8", "fallback": "#fff2c6", "check": "#f8d0d0"}
 def pose_status(entry, bar=DEVIATION_BAR):
     """Status of one pose: ``(kind, reason)`` with kind ``ok``, ``fallback`` or ``check``.
 
-    ``check``: new intersecting faces outside the pass-through fallback, or a constrained-region
-    max deviation above ``bar``; ``fallback``: regions copied from the target or untangled (the
+    ``check``: new intersecting faces outside the pass-through fallback, a constrained-region
+    max deviation above ``bar``, or faces stretched or crushed beyond the entry's distortion limit
+    (:func:`posefix.mesh.distortion.distortion_summary`, against both the target and the reference); ``fallback``: regions copied from the target or untangled (the
     pose is clean but not all of it came from the integration); ``ok`` otherwise.
     """
     faces = entry["intersecting_faces"]
@@ -23,6 +24,9 @@ def pose_status(entry, bar=DEVIATION_BAR):
         reasons.append(f"{outside} new intersecting faces")
     if entry["deviation"]["constrained_max"] > bar:
         reasons.append(f"V_C max deviation {entry['deviation']['constrained_max']:.2g} > {bar:g}")
+    distortion = entry.get("distortion", {})
+    if distortion.get("faces_over", 0) > 0:
+        reasons.append(f"{distortion['faces_over']} faces stretched or crushed beyond {distortion['limit']:g}x")
     if reasons:
         return "check", "; ".join(reasons)
     fallback = entry.get("fallback", {})
@@ -122,7 +126,8 @@ def compared_repairs(entry, names):
     """S0's repair of a pose and the baselines ``names``, side by side: ``{"S0": ..., name: ...}``.
 
     Each value has ``new`` (new intersecting faces), ``constrained_mean``, ``constrained_max``,
-    ``free_max`` (deviations / d), ``seconds`` (S0: :func:`repair_seconds`; a baseline: its own) and
+    ``free_max`` (deviations / d), ``edge`` and ``distorted`` (worst edge-length ratio against the target,
+    faces beyond the distortion limit; None where not measured), ``seconds`` (S0: :func:`repair_seconds`; a baseline: its own) and
     ``converged`` (converged Gauss–Newton runs towards it; None without the check).
     """
     out = {"S0": _compared(entry, repair_seconds(entry), "repaired")}
@@ -133,28 +138,31 @@ def compared_repairs(entry, names):
 
 def _compared(repair, seconds, example):
     """One value of :func:`compared_repairs` from an entry or a baseline's entry (the same keys)."""
-    dev, down = repair["deviation"], repair.get("downstream")
+    dev, down, distortion = repair["deviation"], repair.get("downstream"), repair.get("distortion", {})
     return {"new": repair["intersecting_faces"]["repaired_new"], "constrained_mean": dev["constrained_mean"],
-            "constrained_max": dev["constrained_max"], "free_max": dev["free_max"], "seconds": seconds,
+            "constrained_max": dev["constrained_max"], "free_max": dev["free_max"],
+            "edge": distortion.get("edge_target"), "distorted": distortion.get("faces_over"), "seconds": seconds,
             "converged": None if down is None else converged_runs(down, example)}
 
 
 COMPARISON = (("new faces", "new", "{}"), ("V_C dev. mean", "constrained_mean", "{:.2g}"),
               ("V_C dev. max", "constrained_max", "{:.2g}"), ("free dev. max", "free_max", "{:.2g}"),
+              ("worst edge ratio", "edge", "{:.3g}"), ("distorted faces", "distorted", "{}"),
               ("seconds", "seconds", "{:.1f}"), ("GN converged", "converged", "{}"))
 """Columns of :func:`comparison_table`: label, key of :func:`compared_repairs`, format."""
 
 
 def comparison_table(entries):
     """S0 vs the baseline repairs per pose: ``(header, rows)``, lists of str, one cell ``S0 / <baseline> ...``
-    per :data:`COMPARISON` column (``GN converged`` only when every repair has the downstream check);
+    per :data:`COMPARISON` column (``GN converged`` only when every repair has the downstream check, the
+    distortion columns only when every repair was measured);
     ``([], [])`` without baselines."""
     names = baseline_names(entries)
     if not names:
         return [], []
     repairs = [compared_repairs(e, names) for e in entries]
     columns = [c for c in COMPARISON
-               if c[1] != "converged" or all(r["converged"] is not None for rs in repairs for r in rs.values())]
+               if all(r[c[1]] is not None for rs in repairs for r in rs.values())]
     header = ["pose"] + [f"{label} {' / '.join(['S0', *names])}" for label, _, _ in columns]
     rows = [[e["pose"]] + [" / ".join(fmt.format(r[key]) for r in rs.values()) for _, key, fmt in columns]
             for e, rs in zip(entries, repairs)]
@@ -166,6 +174,10 @@ def comparison_note(header):
     note = ("'new faces': intersecting in the repaired pose but not in the reference; deviations from the target "
             "relative to the bbox diagonal, over S0's V_C and the rest; seconds: S0's stages keyframes to verify "
             "(benchmark files), a baseline's stage (without the skeleton, once per library)")
+    if any(h.startswith("worst edge ratio") for h in header):
+        note += ("; 'worst edge ratio': the largest edge-length ratio (or its inverse) against the target; "
+                 "'distorted faces': faces whose edge-length or area ratio exceeds the distortion limit against both "
+                 "the target and the reference")
     if header[-1].startswith("GN converged"):
         note += "; 'GN converged': Gauss-Newton runs towards the repaired pose that converged (downstream check)"
     return note + "."
@@ -207,6 +219,8 @@ COLUMNS = (
     ("fit max error / d", lambda e: f"{e['fit']['max_error_rel']:.2g}"),
     ("kappa", lambda e: f"{e['fit']['max_condition']:.2g}"),
     ("fallback vertices", lambda e: e["fallback_vertices"]),
+    ("worst edge / area ratio (distorted faces)", lambda e: "{edge_target:.3g} / {area_target:.3g} ({faces_over})".format(
+        **e["distortion"]) if "distortion" in e else "-"),
     ("fit s", lambda e: f"{e['fit']['seconds']:.1f}"),
     ("integrate s", lambda e: f"{e['integrate']['seconds']:.2f}"),
     ("GN converged original / repaired", lambda e: "{converged_original} / {converged_repaired} of {runs}".format(
@@ -233,7 +247,8 @@ def summary_html(library, entries, bar=DEVIATION_BAR):
             f"<h2>posefix summary: {html.escape(library)}</h2>"
             f"<p>{len(entries)} poses: {tally}. ok: clean and within the deviation bar; fallback: clean, with "
             f"regions copied from the target or untangled; check: new intersecting faces outside the pass-through "
-            f"fallback or a V_C max deviation above {bar:g} of the bbox diagonal. Deviations are relative to the "
-            "reference's bbox diagonal.</p>"
+            f"fallback, a V_C max deviation above {bar:g} of the bbox diagonal, or faces stretched or crushed beyond "
+            "the distortion limit against both the target and the reference (ratios against the target). Deviations "
+            "are relative to the reference's bbox diagonal.</p>"
             f"<table><thead><tr>{head}</tr></thead><tbody>{''.join(rows)}</tbody></table>"
             f"{_comparison_html(entries)}</body></html>\n")

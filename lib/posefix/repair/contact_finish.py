@@ -1,0 +1,141 @@
+"""The contact finish of an integrated pose (``verify.finish: contact``): V_C onto its targets, the rest
+toward its goal, through intersection-free shapes only (:mod:`posefix.mesh.contact_solver`).
+
+1. **Start.** The integrated pose when it is intersection-free (no face intersects that does not in the
+   reference; the exact detector). Where key frames pass through each other (S0 Fig. 9) it is not: then the
+   start is the latest intersection-free sample of the integrated path lines, carried along the later
+   samples by the contact solver, which holds the passing region on its intersection-free side.
+2. **Goal.** ``V_C`` on its targets; the free region on the integrated pose plus the ``V_C`` residual blended
+   biharmonically into it (``free_goal: integrated``), or on the target (``free_goal: target``: the closest
+   intersection-free shape to what the artist posed).
+3. **Solve** with ``V_C`` weighted ``constrained_weight`` and the free region 1; the barrier keeps every
+   new contact open.
+4. **Exact V_C**: constrained vertices of no barrier pair are put exactly on their targets where CCD
+   allows the (small) move.
+"""
+
+import logging
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from posefix.mesh.contact_solver import WAYPOINT_TOLERANCE
+from posefix.mesh.harmonic import biharmonic_extension
+from posefix.mesh.intersections import intersecting_faces, self_intersecting_pairs
+
+log = logging.getLogger(__name__)
+
+@dataclass(frozen=True)
+class FinishSettings:
+    """How the contact finish moves an integrated pose; the defaults are the pipeline's (config ``verify``).
+
+    Attributes
+    ----------
+    free_goal : str
+        ``integrated`` (the integrated free region plus the blended V_C residual) or ``target``.
+    constrained_weight : float
+        Weight of ``V_C`` on its targets, relative to the free region's 1.
+    """
+
+    free_goal: str = "integrated"
+    constrained_weight: float = 1e6
+
+
+@dataclass
+class FinishResult:
+    """A pose after the contact finish.
+
+    Attributes
+    ----------
+    X : (n, 3) float
+    exact : (n,) bool
+        Constrained vertices exactly on their targets.
+    contact : (n,) bool
+        Vertices of a barrier pair at the end (held off their goals by a contact).
+    start : str
+        ``integrated`` or ``sample <k>`` (the latest intersection-free sample, carried along the rest).
+    metrics : dict
+        Newton iterations (``contact_iterations``), convergence, start samples tracked, seconds.
+    """
+
+    X: np.ndarray
+    exact: np.ndarray
+    contact: np.ndarray
+    start: str
+    metrics: dict
+
+
+def contact_finish(problem, solver, samples, settings=FinishSettings()):
+    """Finish an integrated pose with the contact solver.
+
+    Parameters
+    ----------
+    problem : posefix.repair.state.RepairProblem
+        Target, ``V_C`` mask, adjacency and the reference's intersecting faces.
+    solver : posefix.mesh.contact_solver.ContactSolver
+        Built on the reference with its intersecting faces tolerated.
+    samples : (S, n, 3) float
+        The integrated path lines at their sample times, the reference first and the integrated pose last.
+    settings : FinishSettings
+
+    Returns
+    -------
+    FinishResult
+    """
+    t0 = time.perf_counter()
+    start, label, tracked, iterations = _intersection_free_start(problem, solver, samples)
+    goal = _goal(problem, samples[-1], settings.free_goal)
+    weights = np.where(problem.mask, settings.constrained_weight, 1.0)
+    result = solver.compute_pose(start, goal, weights)
+    X, exact = _exact_constrained(problem, solver, result)
+    log.info("contact finish from %s: %d Newton iterations (%s), %d of %d constrained vertices exact, %d vertices "
+             "in contact", label, result.iterations, "converged" if result.converged else "not converged",
+             exact.sum(), problem.mask.sum(), result.contact.sum())
+    metrics = {"contact_iterations": result.iterations + iterations, "contact_converged": bool(result.converged),
+               "contact_samples_tracked": tracked, "contact_vertices": int(result.contact.sum()),
+               "contact_dhat_rel": solver.dhat / solver.d}
+    return FinishResult(X, exact, result.contact, label, metrics | {"contact_seconds": time.perf_counter() - t0})
+
+
+def new_faces(problem, X):
+    """Faces of ``X`` that intersect and do not in the reference, (m,) bool (the exact detector)."""
+    F = problem.F
+    return intersecting_faces(self_intersecting_pairs(X, F), len(F)) & ~problem.reference_faces
+
+
+def _intersection_free_start(problem, solver, samples):
+    """(start, label, samples tracked, Newton iterations): the integrated pose if intersection-free, else the
+    latest intersection-free sample carried along the later ones."""
+    last = len(samples) - 1
+    k = last
+    while k > 0 and new_faces(problem, samples[k]).any():
+        k -= 1
+    if k == last:
+        return samples[-1], "integrated", 0, 0
+    result = solver.compute_path(samples[k], samples[k + 1:], WAYPOINT_TOLERANCE)
+    log.info("contact finish: the integrated pose has new intersecting faces; samples %d-%d tracked from sample %d "
+             "(%d Newton iterations)", k + 1, last, k, result.iterations)
+    return result.X, f"sample {k}", last - k, result.iterations
+
+
+def _goal(problem, X_int, free_goal):
+    """Goal positions (n, 3): V_C on the target, the free region as ``free_goal`` says."""
+    if free_goal == "target":
+        return problem.V_tgt.copy()
+    mask = problem.mask
+    goal = X_int + biharmonic_extension(problem.A, problem.V_tgt - X_int, mask, ~mask)
+    goal[mask] = problem.V_tgt[mask]
+    return goal
+
+
+def _exact_constrained(problem, solver, result):
+    """Put the constrained vertices of no barrier pair exactly on their targets if CCD allows the move."""
+    exact = problem.mask & ~result.contact
+    Y = result.X.copy()
+    Y[exact] = problem.V_tgt[exact]
+    step = solver.candidates(result.X, Y).compute_collision_free_stepsize(solver.mesh, result.X, Y)
+    if step < 1.0:
+        log.info("contact finish: the exact V_C move would touch a contact (CCD step %.3f); kept the solver's", step)
+        return result.X, problem.mask & (result.X == problem.V_tgt).all(axis=1)
+    return Y, exact

@@ -1,0 +1,70 @@
+"""The contact finish of stage verify: V_C on its targets, no new intersection, a pass-through held back."""
+
+import re
+
+import numpy as np
+
+from conftest import ROOT, grid_sheet
+from posefix.mesh.contact_solver import ContactSolver
+from posefix.mesh.intersections import intersecting_faces, self_intersecting_pairs
+from posefix.mesh.rotations import rotation_exp
+from posefix.repair.flags import CONTACT, REPRODUCED
+from posefix.repair.sequence import finish_pose
+from posefix.repair.state import RepairProblem
+from test_sequence import _expand
+
+
+def _sheets(upper_target):
+    """A lower and an upper 9 x 9 sheet 0.1 apart; the lower one is V_C and stays, the upper one is free and
+    goes to ``upper_target`` (81, 3)."""
+    V1, F1 = grid_sheet(9, 0.0)
+    V2, F2 = grid_sheet(9, 0.1)
+    V, F = np.vstack([V1, V2]), np.vstack([F1, F2 + len(V1)])
+    target = np.vstack([V1, upper_target])
+    mask = np.arange(len(V)) < len(V1)
+    pairs = [self_intersecting_pairs(P, F) for P in (V, target)]
+    return V, F, RepairProblem.build(V, target, F, mask, pairs)
+
+
+def test_a_rigid_motion_of_the_targets_comes_back_exactly():
+    V, F, _ = _sheets(grid_sheet(9, 0.1)[0])
+    R = rotation_exp(np.array([[0.3, 0.1, -0.2]]))[0]
+    target = V @ R.T + [0.2, 0.1, -0.3]
+    mask = np.arange(len(V)) % 3 > 0
+    problem = RepairProblem.build(V, target, F, mask, [np.zeros((0, 2), int)] * 2)
+    samples = np.stack([V, 0.5 * (V + target), target + 1e-4])  # the integration missed by 1e-4
+    result = finish_pose(problem, samples, 1.0, ContactSolver(V, F))
+    assert np.abs(result.X - target).max() < 1e-9
+    assert np.array_equal(result.X[mask], target[mask]) and (result.replaced[mask] == REPRODUCED).all()
+    assert result.metrics["repaired_new"] == 0 and result.metrics["contact_samples_tracked"] == 0
+
+
+def test_a_pass_through_stays_on_the_intersection_free_side():
+    upper = grid_sheet(9, 0.0)[0]
+    upper[:, 2] = -0.1 + 0.2 * upper[:, 0]  # tilted through the lower sheet: crosses it at x = 0.5
+    V, F, problem = _sheets(upper)
+    assert problem.target_faces.any() and not problem.reference_faces.any()
+    t = np.linspace(0, 1, 5)[:, None, None]
+    samples = (1 - t) * V + t * problem.V_tgt  # the integrated path lines pass through the lower sheet
+    solver = ContactSolver(V, F)
+    result = finish_pose(problem, samples, 1.0, solver)
+    faces = intersecting_faces(self_intersecting_pairs(result.X, F), len(F))
+    assert not faces.any() and result.metrics["repaired_new"] == 0
+    assert result.metrics["contact_samples_tracked"] >= 1
+    contact = (result.replaced & CONTACT) > 0
+    assert contact.any() and np.abs(result.X[problem.mask] - V[problem.mask]).max() <= 1e-6
+    apart = problem.mask & ~contact
+    assert apart.any() and np.array_equal(result.X[apart], V[apart])  # V_C exact away from the contacts
+    upper_z = result.X[~problem.mask, 2]
+    assert upper_z.min() > 0.0  # held above the lower sheet
+    # where the target is above the lower sheet, the free sheet reaches it
+    above = problem.V_tgt[~problem.mask, 2] > 0.05
+    assert np.abs(result.X[~problem.mask][above] - problem.V_tgt[~problem.mask][above]).max() < 0.05
+
+
+def test_the_contact_finish_metrics_are_the_documented_ones():
+    V, F, problem = _sheets(grid_sheet(9, 0.1)[0])
+    metrics = finish_pose(problem, np.stack([V, V]), 1.0, ContactSolver(V, F)).metrics
+    section = (ROOT / "docs" / "artifacts.md").read_text().split("## verify")[1].split("## export")[0]
+    listed = section.split("Metrics:")[1].split("Timings:")[0] + section.split("adds the metrics")[1]
+    assert set(metrics) == {n for token in re.findall(r"`([a-z_{},0-9]+)`", listed) for n in _expand(token)}
