@@ -1,11 +1,16 @@
 """Repairs compared (`make bench`, or alone: `.venv/bin/python benchmarks/repairs.py`): reports/bench/repairs.md.
 
-S0's space-time repair and the baseline repairs (config ``baselines: [medial, volumetric]``: S1's balls and
-flow, S4's volumetric fill) on every pose of lion, cat and horse (../shared/data) and the demo library: the
-pipeline runs with the downstream check towards every repaired pose (``downstream.baselines: true``;
-Snakemake reuses what is up to date), then
-one table from each library's summary.json: poses with no new intersecting face outside S0's pass-through
-regions, deviation from the target over V_C and over the free vertices (relative to the bbox diagonal),
+Five repairs of every pose of lion, cat, horse and camel (../shared/data) and the demo library, from the same
+targets: space-time integration (S0) with the snap finish and with the contact finish (config
+``verify.finish``), the medial repair (S1's balls and flow), the volumetric fill (S4's editor) and the contact
+repair (the IPC contact solver through S0's key frames). The pipeline runs twice per library in one go: with
+the contact finish and every baseline (results/<library>), then with the snap finish alone
+(results/<library>-snap-finish), the downstream check towards every repaired pose both times
+(``downstream.baselines: true``; Snakemake reuses what is up to date; ``--quick-downstream``: one setting of
+the grid, alpha 1 and k_b 1e-2, as ``make run``). One table from the summary.json files:
+poses with no new intersecting face (S0's snap: outside its pass-through regions), poses "ok" (clean, V_C
+within the bar, no distorted face), deviation from the target over V_C and over the free vertices (relative
+to the bbox diagonal), the worst edge-length and area ratios against the target and the distorted faces,
 Gauss-Newton runs converged and their iterations, seconds per pose.
 """
 
@@ -21,20 +26,24 @@ from pathlib import Path
 import numpy as np
 
 from posefix.pipeline.timings import benchmark_seconds
-from posefix.report.tables import repair_seconds
+from posefix.report.tables import pose_status, repair_seconds
 
 ROOT = Path(__file__).resolve().parents[1]
 DATA = Path(os.environ.get("POSEFIX_DATA", ROOT.parent / "shared" / "data"))
-LIBRARIES = ("lion-poses", "cat-poses", "horse-poses")
+LIBRARIES = ("lion-poses", "cat-poses", "horse-poses", "camel-poses")
 CHECK_BASELINES = "downstream={'baselines': True}"
+QUICK_DOWNSTREAM = "downstream={'baselines': True, 'alphas': [1.0], 'k_bend': [0.01]}"
+CONTACT_FINISH = "verify={'finish': 'contact'}"
+SNAP_FINISH = ("verify={'finish': 'snap'}", "baselines=[]")
+"""The second run of a library: S0 with the snap finish, no baselines (they are the first run's)."""
 
 
-def run_library(lib, cores, out):
-    """Run the pipeline on ``lib`` (None: the demo) with the check towards the baselines; its summary entries
-    (its summary.md goes to ``out``/summary-<library>.md)."""
-    name = lib.name if lib else "demo"
-    config = [f"library={lib}"] if lib else []
-    cmd = [sys.executable, "-m", "snakemake", "--cores", str(cores), "--config", *config, CHECK_BASELINES]
+def run_library(lib, cores, out, extra=(CHECK_BASELINES,), suffix=""):
+    """Run the pipeline on ``lib`` (None: the demo) with the ``extra`` config (the check towards the baselines),
+    results under <library><suffix>; its summary entries (its summary.md goes to ``out``)."""
+    name = (lib.name if lib else "demo") + suffix
+    config = ([f"library={lib}"] if lib else []) + ([f"name={name}"] if suffix else [])
+    cmd = [sys.executable, "-m", "snakemake", "--cores", str(cores), "--config", *config, *extra]
     print("+", " ".join(cmd), flush=True)
     subprocess.run(cmd, cwd=ROOT, check=True)
     shutil.copyfile(ROOT / "reports" / name / "summary.md", out / f"summary-{name}.md")
@@ -48,78 +57,110 @@ def gauss_newton(downstream, example):
     return converged, sum(len(r["converged"]) for r in runs), sum(sum(r["iterations"]) for r in runs)
 
 
-BASELINES = ("medial", "volumetric")
+BASELINES = ("medial", "volumetric", "contact")
 LIBRARY_STAGES = {"medial": "skeleton", "volumetric": "tet_mesh"}
-"""The once-per-library stage of each baseline (its seconds are reported apart)."""
+"""The once-per-library stage of a baseline (its seconds are reported apart)."""
+REPAIRS = ("S0 contact finish", "S0 snap", *BASELINES)
 
 
-def method_rows(entries):
-    """Per method (S0, then each baseline): the figures of one library over its poses (dict of dicts)."""
-    s0 = [{"clean": e["intersecting_faces"]["repaired_new"] == e["intersecting_faces"]["repaired_new_in_fallback"],
-           "new": e["intersecting_faces"]["repaired_new"], "deviation": e["deviation"], "seconds": repair_seconds(e),
-           "gn": gauss_newton(e["downstream"], "repaired"), "gn_target": gauss_newton(e["downstream"], "original")}
-          for e in entries]
-    rows = {"S0": _aggregate(s0)}
+def method_rows(contact, snap):
+    """Per repair of :data:`REPAIRS`: the figures of one library over its poses (dict of dicts); ``contact`` and
+    ``snap``: the summary entries of the two runs (the baselines are the first's)."""
+    rows = {finish: _aggregate([_s0_row(e) for e in entries]) for finish, entries in
+            (("S0 contact finish", contact), ("S0 snap", snap))}
     for name in BASELINES:
-        rows[name] = _aggregate([{"clean": b["intersecting_faces"]["repaired_new"] == 0,
+        rows[name] = _aggregate([{"clean": b["intersecting_faces"]["repaired_new"] == 0, "ok": None,
                                   "new": b["intersecting_faces"]["repaired_new"], "deviation": b["deviation"],
-                                  "seconds": b["seconds"],
+                                  "distortion": b.get("distortion"), "seconds": b["seconds"],
                                   "gn": gauss_newton(b["downstream"], name) if "downstream" in b else None}
-                                 for b in (e["baselines"][name] for e in entries)])
-    rows["target"] = {"gn": np.sum([r["gn_target"] for r in s0], axis=0).tolist()}
+                                 for b in (e["baselines"][name] for e in contact)])
+    rows["target"] = {"gn": np.sum([gauss_newton(e["downstream"], "original") for e in contact], axis=0).tolist()}
     return rows
 
 
+def _s0_row(e):
+    faces = e["intersecting_faces"]
+    return {"clean": faces["repaired_new"] == faces["repaired_new_in_fallback"], "new": faces["repaired_new"],
+            "ok": pose_status(e)[0] == "ok", "deviation": e["deviation"], "distortion": e.get("distortion"),
+            "seconds": repair_seconds(e), "gn": gauss_newton(e["downstream"], "repaired")}
+
+
 def _aggregate(rows):
-    dev = [r["deviation"] for r in rows]
+    dev, dist = [r["deviation"] for r in rows], [r["distortion"] for r in rows if r["distortion"]]
     gn = [r["gn"] for r in rows if r["gn"] is not None]
+    oks = [r["ok"] for r in rows if r["ok"] is not None]
     return {"poses": len(rows), "clean": sum(r["clean"] for r in rows), "new_faces": sum(r["new"] for r in rows),
+            "ok": sum(oks) if oks else None,
             "vc_mean": float(np.mean([d["constrained_mean"] for d in dev])),
             "vc_max": float(max(d["constrained_max"] for d in dev)),
+            "free_mean": float(np.mean([d["free_mean"] for d in dev])),
             "free_max": float(max(d["free_max"] for d in dev)),
+            "edge": float(max(d["edge_target"] for d in dist)) if dist else None,
+            "area": float(max(d["area_target"] for d in dist)) if dist else None,
+            "distorted": sum(d["faces_over"] for d in dist) if dist else None,
             "gn": np.sum(gn, axis=0).tolist() if len(gn) == len(rows) else None,
             "seconds": float(np.mean([r["seconds"] for r in rows]))}
 
 
 def markdown(result):
     """The section 'Repairs compared' of BENCHMARKS.md (list of str)."""
-    lines = ["## Repairs compared: S0 vs the medial repair (S1) and the volumetric fill (S4)", "",
-             "Every pose of each library, the three repairs from the same target (`benchmarks/repairs.py`, which also "
-             "runs alone). Per pose: `summary-<library>.md`, section 'S0 vs the baseline repairs'.", "",
-             "| library | repair | poses | 0 new faces (S0: outside pass-through) | new faces (all poses) | "
-             "V_C deviation mean (mean over poses) | V_C max | free max | GN converged / runs | GN iterations "
-             "(all runs) | seconds per pose |", "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
+    lines = ["## Repairs compared: space-time (snap and contact finish), medial, volumetric, contact", "",
+             "Every pose of each library, the five repairs from the same target (`benchmarks/repairs.py`, which also "
+             "runs alone). Per pose: `summary-<library>.md` (contact finish and the baselines) and "
+             "`summary-<library>-snap-finish.md`." + (" Downstream check: one setting (alpha 1, k_b 1e-2)."
+                                                      if result["quick_downstream"] else ""), "",
+             "| library | repair | poses | 0 new faces (snap: outside pass-through) | new faces (all poses) | ok | "
+             "V_C dev. mean (mean over poses) | V_C max | free mean | free max | worst edge / area ratio | distorted "
+             "faces | GN converged / runs | GN iterations (all runs) | seconds per pose |",
+             "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---|---:|---:|---:|---:|"]
     for name, r in result["libraries"].items():
-        for method in ("S0", *BASELINES):
-            m = r[method]
-            gn = f"{m['gn'][0]} / {m['gn'][1]} | {m['gn'][2]}" if m["gn"] else "- | -"
-            lines.append(f"| {name} | {method} | {m['poses']} | {m['clean']} | {m['new_faces']} | {m['vc_mean']:.1e} | "
-                         f"{m['vc_max']:.1e} | {m['free_max']:.1e} | {gn} | {m['seconds']:.1f} |")
+        for method in REPAIRS:
+            lines.append(_markdown_row(name, method, r[method]))
         t = r["target"]["gn"]
-        lines.append(f"| {name} | (target, unrepaired) | | | | | | | {t[0]} / {t[1]} | {t[2]} | |")
+        lines.append(f"| {name} | (target, unrepaired) | | | | | | | | | | | {t[0]} / {t[1]} | {t[2]} | |")
     lines += ["", "Deviations are from the target, relative to the reference's bbox diagonal, over S0's V_C (classify) "
-                  "and the other (free) vertices. GN: the downstream Gauss-Newton check (S0 §5) over config "
-                  "downstream's grid towards each pose. Seconds: wall seconds of the stages per pose (S0: keyframes "
-                  "to verify; medial: repair_medial; volumetric: repair_volumetric), without the stages each baseline "
-                  "runs once per library (medial: skeleton; volumetric: tet_mesh): "
+                  "and the other (free) vertices. ok: the report's status (no new intersecting face outside the "
+                  "pass-through regions, V_C max within 5e-3, no distorted face; S0 only). Ratios: the worst "
+                  "edge-length and face-area ratio (or its inverse) against the target over all poses; distorted: "
+                  "faces beyond config summary.distortion_limit against both the target and the reference. GN: the "
+                  "downstream Gauss-Newton check (S0 §5) over config downstream's grid towards each pose. Seconds: "
+                  "wall seconds of the stages per pose (S0: keyframes to verify; a baseline: its repair stage), "
+                  "without the stages a baseline runs once per library (medial: skeleton; volumetric: tet_mesh): "
               + ", ".join(f"{n} {r['library_seconds']['skeleton']:.1f} s and {r['library_seconds']['tet_mesh']:.1f} s"
                           for n, r in result["libraries"].items()) + ".", ""]
     return lines
+
+
+def _markdown_row(library, method, m):
+    gn = f"{m['gn'][0]} / {m['gn'][1]} | {m['gn'][2]}" if m["gn"] else "- | -"
+    ratios = f"{m['edge']:.3g} / {m['area']:.3g}" if m["edge"] is not None else "-"
+    return (f"| {library} | {method} | {m['poses']} | {m['clean']} | {m['new_faces']} | "
+            f"{'-' if m['ok'] is None else m['ok']} | {m['vc_mean']:.1e} | {m['vc_max']:.1e} | {m['free_mean']:.1e} | "
+            f"{m['free_max']:.1e} | {ratios} | {'-' if m['distorted'] is None else m['distorted']} | {gn} | "
+            f"{m['seconds']:.1f} |")
 
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--out", default=str(ROOT / "reports" / "bench"))
     parser.add_argument("--cores", type=int, default=2)
+    parser.add_argument("--libraries", default=",".join(LIBRARIES + ("demo",)),
+                        help="comma-separated libraries of ../shared/data, 'demo' for the demo library")
+    parser.add_argument("--quick-downstream", action="store_true",
+                        help="the downstream check with one setting (alpha 1, k_b 1e-2) instead of the grid")
     args = parser.parse_args()
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     start = time.perf_counter()
-    libraries = [DATA / n for n in LIBRARIES if (DATA / n).is_dir()] + [None]
-    result = {"libraries": {}}
+    names = [n for n in args.libraries.split(",") if n]
+    libraries = [DATA / n for n in names if n != "demo" and (DATA / n).is_dir()] + ([None] if "demo" in names else [])
+    result = {"libraries": {}, "quick_downstream": args.quick_downstream}
+    check = QUICK_DOWNSTREAM if args.quick_downstream else CHECK_BASELINES
     for lib in libraries:
         name = lib.name if lib else "demo"
-        rows = method_rows(run_library(lib, args.cores, out))
+        contact = run_library(lib, args.cores, out, [check, CONTACT_FINISH])
+        snap = run_library(lib, args.cores, out, [check, *SNAP_FINISH], "-snap-finish")
+        rows = method_rows(contact, snap)
         rows["library_seconds"] = {stage: benchmark_seconds(ROOT / "results" / name / "benchmarks", stage) or 0.0
                                    for stage in LIBRARY_STAGES.values()}
         result["libraries"][name] = rows

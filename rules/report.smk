@@ -44,6 +44,7 @@ rule render:
         folder=lambda wildcards, output: os.path.dirname(output[0]),
         benchmarks=lambda wildcards, input: os.path.dirname(input.benchmarks[0]),
         baselines=lambda wildcards: named_options("--baseline", baseline_artifacts(wildcards.pose)),
+        limit=config["summary"]["distortion_limit"],
         python=PYTHON,
         script=stage_script("render"),
         code=stage_code("render"),
@@ -55,7 +56,8 @@ rule render:
     shell:
         "{params.python:q} {params.script:q} --keyframes {input.keyframes:q} --classify {input.classify:q}"
         " --fit {input.fit:q} --verify {input.verify:q} --benchmarks {params.benchmarks:q}"
-        " {params.baselines} --pose {wildcards.pose:q} --out {params.folder:q} --log {log:q}"
+        " {params.baselines} --distortion-limit {params.limit} --pose {wildcards.pose:q} --out {params.folder:q}"
+        " --log {log:q}"
 
 
 rule overview:

@@ -1,7 +1,7 @@
 """Stage render: the report figures of one pose (PNG, offscreen).
 
 Writes into ``--out``: ``renders.png`` (target vs repaired, and every ``--baseline`` repair beside
-them, intersecting faces highlighted),
+them, intersecting and distorted faces highlighted),
 ``deviation.png`` (deviation heat map on the repaired pose with a colour bar, fallback regions),
 ``classification.png`` (intersecting faces per key frame before and after, ``V_C`` on the
 reference), ``fit.png`` (fit history: error, condition, seconds per iteration) and
@@ -14,9 +14,10 @@ from pathlib import Path
 
 import posefix.pipeline.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; runtime defaults before numpy)
 
+from posefix.mesh.distortion import distorted_faces, distortion_summary
 from posefix.mesh.intersections import intersecting_faces, self_intersecting_pairs
 from posefix.pipeline.artifacts import read_artifact, read_baseline
-from posefix.pipeline.cli import named_path, run_stage, stage_parser
+from posefix.pipeline.cli import library_defaults, named_path, run_stage, stage_parser
 from posefix.pipeline.files import write_figure
 from posefix.pipeline.timings import Timings, benchmark_seconds
 from posefix.report import figures
@@ -39,6 +40,9 @@ def build_parser():
     parser.add_argument("--baseline", type=named_path, action="append", default=[], metavar="NAME=PATH",
                         help="a baseline repair's artifact (e.g. medial=<pose>/medial.h5), drawn beside the repaired "
                         "pose in renders.png; repeatable")
+    parser.add_argument("--distortion-limit", type=float, default=library_defaults(distortion_summary)["limit"],
+                        help="faces whose edge-length or area ratio exceeds this against both the target and the "
+                        "reference are drawn as distorted")
     return parser
 
 
@@ -57,11 +61,13 @@ def main(args, log):
     repaired_faces = intersecting_faces(ve["pairs"], m)
     with timings.step("intersections"):
         baselines = {name: (X, intersecting_faces(self_intersecting_pairs(X, F), m)) for name, X in compared.items()}
+        distorted = [distorted_faces(X, [V_tgt, V_ref], F, args.distortion_limit)
+                     for X in [ve["repaired"], *compared.values()]]
     R = camera(V_ref)
     made = {}
     with timings.step("figures"):
         made["renders"] = figures.renders(V_tgt, ve["repaired"], F, R, target_faces, repaired_faces, reference_faces,
-                                          title=args.pose, baselines=baselines)
+                                          title=args.pose, baselines=baselines, distorted=distorted)
         made["deviation"] = figures.deviation_map(ve["repaired"], F, R, ve["deviation"], ve["replaced"],
                                                   title=args.pose)
         made["classification"] = figures.classification(

@@ -7,6 +7,7 @@ tolerated). See ``posefix.contact.keyframe_tracking``.
 """
 
 import posefix.pipeline.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; runtime defaults before numpy)
+import numpy as np
 
 from posefix.contact.keyframe_tracking import track_keyframes
 from posefix.mesh.contact_solver import ContactSolver
@@ -18,7 +19,7 @@ from posefix.pipeline.timings import Timings
 from posefix.spacetime.classification import split_frames
 
 DOCS = {
-    "start": ("length", "the target pose, (n, 3) float64"),
+    "start": ("length", "the target pose (the last key frame, exactly), (n, 3) float64"),
     "repaired": ("length", "the repaired pose: the reference carried through the key frames, (n, 3) float64"),
     "contact": ("bool", "vertices the barrier holds off the target (closer than dhat to a part they do not touch "
                         "in the reference), (n,) bool"),
@@ -38,9 +39,9 @@ def build_parser():
 def main(args, log):
     timings = Timings()
     with timings.step("read"):
-        kf, _ = read_artifact(args.keyframes, "keyframes", ["frames", "faces"])
+        kf, _ = read_artifact(args.keyframes, "keyframes", ["frames", "faces", "reference", "target"])
         cl, _ = read_artifact(args.classify, "classify", ["pairs", "pair_offsets"])
-    frames, F = kf["frames"], kf["faces"]
+    frames, F = np.concatenate([kf["reference"][None], kf["frames"][1:-1], kf["target"][None]]), kf["faces"]
     reference_faces = intersecting_faces(split_frames(cl["pairs"], cl["pair_offsets"])[0], len(F))
     settings, params = contact_settings(args)
     with timings.step("prepare"):

@@ -135,7 +135,7 @@ WORKFLOW_ONLY = {("demo", "folder"), ("classify", "exclude"), ("integrate", "dev
 repair_volumetric.tet_vertices goes to stage tet_mesh (its library default is checked in LIBRARY)."""
 
 
-SECTION_STAGES = {"contact": ["verify", "repair_contact"]}
+SECTION_STAGES = {"contact": ["verify", "repair_contact"], "summary": ["summary", "render"]}
 """Config sections read by other stages than the one of their name."""
 
 

@@ -7,8 +7,6 @@ from posefix.report import figures
 from posefix.report.rasterizer import camera
 
 
-
-
 def test_pose_figures_are_non_blank():
     V, F = icosphere(2)
     R = camera(V)
@@ -62,3 +60,19 @@ def test_downstream_history_draws_baselines_dotted():
               if not line.get_label().startswith("_")}
     assert styles == {"original": "--", "repaired": "-", "medial": ":"}
     assert "dotted: medial" in fig.get_suptitle()
+
+
+
+def test_renders_draw_distorted_faces_in_their_own_colour():
+    V, F = icosphere(2)
+    R = camera(V)
+    none = np.zeros(len(F), dtype=bool)
+    bad = none.copy()
+    bad[: len(F) // 2] = True
+    plain = figures.renders(V, V, F, R, none, none, none, baselines={"contact": (V, none)})
+    marked = figures.renders(V, V, F, R, none, none, none, baselines={"contact": (V, none)}, distorted=[none, bad])
+    assert marked.axes[2].get_title() == f"contact: 0 intersecting faces, 0 new, {len(F) // 2} distorted"
+    assert marked.axes[1].get_title() == "S0: 0 intersecting faces, 0 new"
+    a, b = pixels(plain)[..., :3], pixels(marked)[..., :3]
+    purple = lambda p: ((p[..., 2] > p[..., 1] + 0.2) & (p[..., 0] > p[..., 1] + 0.1)).sum()  # noqa: E731
+    assert a.shape == b.shape and purple(b) > 1000 > 10 * purple(a)

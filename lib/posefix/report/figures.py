@@ -13,7 +13,7 @@ from matplotlib.patches import Patch
 
 from posefix.repair.flags import (CONTACT, FLAGS, PUSHED, REPLACED_NEW_INTERSECTION, REPLACED_PASS_THROUGH,
                                   RIGID_REFERENCE, SEPARATED, SMOOTHED)
-from posefix.report.rasterizer import HIGHLIGHT, SECONDARY, draw_mesh, face_values, heat_colors, view_limits
+from posefix.report.rasterizer import DISTORTED, HIGHLIGHT, SECONDARY, draw_mesh, face_values, heat_colors, view_limits
 from posefix.report.tables import baseline_names, converged_runs, downstream_counts
 
 DPI = 110
@@ -35,7 +35,8 @@ def panel_height(limits, width=4.6, extra=1.8):
     return float(np.clip(width * aspect + extra, 3.0, 9.0))
 
 
-def renders(V_tgt, X, F, R, target_faces, repaired_faces, reference_faces, title="", baselines=None):
+def renders(V_tgt, X, F, R, target_faces, repaired_faces, reference_faces, title="", baselines=None,
+            distorted=None):
     """Target and repaired pose side by side, intersecting faces highlighted (S0 Fig. 6 style).
 
     Parameters
@@ -50,27 +51,34 @@ def renders(V_tgt, X, F, R, target_faces, repaired_faces, reference_faces, title
     baselines : dict of str -> ((n, 3) float, (m,) bool), optional
         Positions and intersecting faces of baseline repairs, one more panel each (the repaired pose
         is then titled S0).
+    distorted : list of (m,) bool, optional
+        Distorted faces of each repaired pose (S0's, then the baselines' in order): drawn in purple, counted
+        in the titles (:func:`posefix.mesh.distortion.distorted_faces`).
 
     Returns
     -------
     Figure
         Red: intersecting faces the reference does not have (in the repaired poses: new ones);
-        orange: intersecting faces the reference has too.
+        orange: intersecting faces the reference has too; purple: distorted faces.
     """
     panels = [("target", V_tgt, target_faces), ("S0" if baselines else "repaired", X, repaired_faces)]
     panels += [(name, V, faces) for name, (V, faces) in (baselines or {}).items()]
+    over = [np.zeros(len(F), dtype=bool)] + list(distorted or [np.zeros(len(F), dtype=bool)] * (len(panels) - 1))
     limits = view_limits(*(V for _, V, _ in panels), R=R)
     fig = Figure(figsize=(5 * len(panels), panel_height(limits)), dpi=DPI)
-    for i, (name, V, faces) in enumerate(panels):
+    for i, ((name, V, faces), bad) in enumerate(zip(panels, over)):
         ax = fig.add_subplot(1, len(panels), i + 1)
-        draw_mesh(ax, V, F, R, highlight=[(faces & reference_faces, SECONDARY), (faces & ~reference_faces, HIGHLIGHT)],
-                  scale=limits)
+        draw_mesh(ax, V, F, R, highlight=[(bad, DISTORTED), (faces & reference_faces, SECONDARY),
+                                          (faces & ~reference_faces, HIGHLIGHT)], scale=limits)
         label = "not in the reference" if i == 0 else "new"
-        ax.set_title(f"{name}: {faces.sum()} intersecting faces, {(faces & ~reference_faces).sum()} {label}",
+        extra = f", {bad.sum()} distorted" if bad.any() else ""
+        ax.set_title(f"{name}: {faces.sum()} intersecting faces, {(faces & ~reference_faces).sum()} {label}{extra}",
                      fontsize=10)
-    fig.legend(handles=[Patch(color=HIGHLIGHT, label="intersecting, not in the reference"),
-                        Patch(color=SECONDARY, label="intersecting in the reference too")],
-               loc="lower center", ncol=2, frameon=False, fontsize=9)
+    handles = [Patch(color=HIGHLIGHT, label="intersecting, not in the reference"),
+               Patch(color=SECONDARY, label="intersecting in the reference too")]
+    if distorted is not None:
+        handles.append(Patch(color=DISTORTED, label="stretched or crushed beyond the distortion limit"))
+    fig.legend(handles=handles, loc="lower center", ncol=len(handles), frameon=False, fontsize=9)
     fig.suptitle(title, fontsize=11)
     return fig
 

@@ -17,6 +17,8 @@ HIGHLIGHT = np.array([0.90, 0.10, 0.10])
 """Colour of highlighted faces (intersecting, or new)."""
 SECONDARY = np.array([1.00, 0.60, 0.00])
 """Colour of secondary highlights (intersections the reference has too)."""
+DISTORTED = np.array([0.55, 0.20, 0.80])
+"""Colour of distorted faces (stretched or crushed beyond the distortion limit)."""
 LIGHT = np.array([0.35, 0.55, 0.76])
 """Light direction in camera coordinates (x right, y up, z towards the viewer), unit length."""
 
