@@ -20,6 +20,7 @@ import os
 import shutil
 import subprocess
 import sys
+import tempfile
 import time
 from pathlib import Path
 
@@ -48,6 +49,41 @@ def run_library(lib, cores, out, extra=(CHECK_BASELINES,), suffix=""):
     subprocess.run(cmd, cwd=ROOT, check=True)
     shutil.copyfile(ROOT / "reports" / name / "summary.md", out / f"summary-{name}.md")
     return json.loads((ROOT / "reports" / name / "summary.json").read_text())["poses"]
+
+
+def finish_seconds(name, poses):
+    """Wall seconds of stage verify per pose with each finish, one process at a time on the same artifacts of
+    results/<name> (the pipeline runs jobs side by side, so its own benchmark files mix in their contention):
+    {pose: {"contact": s, "snap": s}}."""
+    out = {}
+    for pose in poses:
+        folder = ROOT / "results" / name / pose
+        inputs = [f"--{k}={folder / f'{k}.h5'}" for k in ("keyframes", "classify", "integrate", "fit")]
+        out[pose] = {}
+        for finish in ("contact", "snap"):
+            with tempfile.TemporaryDirectory() as tmp:
+                start = time.perf_counter()
+                subprocess.run([sys.executable, str(ROOT / "stages" / "verify.py"), *inputs, "--finish", finish,
+                                "--threads", "1", "--out", str(Path(tmp) / "verify.h5")], check=True,
+                               capture_output=True)
+                out[pose][finish] = time.perf_counter() - start
+    return out
+
+
+def finish_markdown(result):
+    """The table of :func:`finish_seconds` with S0's other stages added (list of str)."""
+    lines = ["", "### Seconds per pose: the contact finish against the snap finish", "",
+             "Stage verify alone, one process at a time on the same artifacts (`--threads 1`), plus S0's stages "
+             "keyframes to integrate (the pipeline's benchmark files of the contact run).", "",
+             "| library | pose | keyframes to integrate s | verify contact s | verify snap s | S0 contact s | S0 snap s "
+             "| ratio |", "|---|---|---:|---:|---:|---:|---:|---:|"]
+    for name, r in result["libraries"].items():
+        for pose, t in r["finish_seconds"].items():
+            before = r["upstream_seconds"][pose]
+            lines.append(f"| {name} | {pose} | {before:.1f} | {t['contact']:.1f} | {t['snap']:.1f} | "
+                         f"{before + t['contact']:.1f} | {before + t['snap']:.1f} | "
+                         f"{(before + t['contact']) / (before + t['snap']):.2f} |")
+    return lines + [""]
 
 
 def gauss_newton(downstream, example):
@@ -161,11 +197,14 @@ def main():
         contact = run_library(lib, args.cores, out, [check, CONTACT_FINISH])
         snap = run_library(lib, args.cores, out, [check, *SNAP_FINISH], "-snap-finish")
         rows = method_rows(contact, snap)
+        rows["finish_seconds"] = finish_seconds(name, [e["pose"] for e in contact])
+        rows["upstream_seconds"] = {e["pose"]: repair_seconds(e) - (e["seconds_stages"].get("verify") or 0.0)
+                                    for e in contact}
         rows["library_seconds"] = {stage: benchmark_seconds(ROOT / "results" / name / "benchmarks", stage) or 0.0
                                    for stage in LIBRARY_STAGES.values()}
         result["libraries"][name] = rows
     result["seconds"] = time.perf_counter() - start
-    (out / "repairs.md").write_text("\n".join(markdown(result)))
+    (out / "repairs.md").write_text("\n".join(markdown(result) + finish_markdown(result)))
     (out / "repairs.json").write_text(json.dumps(result, indent=1))
     print(f"wrote {out / 'repairs.md'}")
 

@@ -6,10 +6,11 @@ import numpy as np
 
 from conftest import ROOT, grid_sheet
 from posefix.mesh.contact_solver import ContactSolver
+from posefix.mesh.distortion import distortion_summary
 from posefix.mesh.intersections import intersecting_faces, self_intersecting_pairs
 from posefix.mesh.rotations import rotation_exp
 from posefix.repair.flags import CONTACT, REPRODUCED
-from posefix.repair.sequence import finish_pose
+from posefix.repair.sequence import finish_pose, repair_pose
 from posefix.repair.state import RepairProblem
 from test_sequence import _expand
 
@@ -68,3 +69,43 @@ def test_the_contact_finish_metrics_are_the_documented_ones():
     section = (ROOT / "docs" / "artifacts.md").read_text().split("## verify")[1].split("## export")[0]
     listed = section.split("Metrics:")[1].split("Timings:")[0] + section.split("adds the metrics")[1]
     assert set(metrics) == {n for token in re.findall(r"`([a-z_{},0-9]+)`", listed) for n in _expand(token)}
+
+
+def _folded_strip(hinge):
+    """A 1 x 0.15 strip (21 x 4 vertices) and its target folded back over itself at x = ``hinge`` (a round hinge
+    of radius 0.05, the tip 0.1 above the base); V_C: both ends (x <= 0.2 and x >= 0.8)."""
+    x, y = np.meshgrid(np.linspace(0, 1, 21), np.linspace(0, 0.15, 4), indexing="ij")
+    V = np.column_stack([x.ravel(), y.ravel(), np.zeros(x.size)])
+    F = np.array([[i * 4 + j, (i + 1) * 4 + j, (i + 1) * 4 + j + 1] for i in range(20) for j in range(3)]
+                 + [[i * 4 + j, (i + 1) * 4 + j + 1, i * 4 + j + 1] for i in range(20) for j in range(3)])
+    s = V[:, 0] - hinge
+    bend = np.clip(s / 0.05, 0, np.pi)
+    T = V.copy()
+    T[:, 0] = np.where(s <= 0, V[:, 0], np.where(s < 0.05 * np.pi, hinge + 0.05 * np.sin(bend),
+                                                  hinge - (s - 0.05 * np.pi)))
+    T[:, 2] = np.where(s <= 0, 0.0, np.where(s < 0.05 * np.pi, 0.05 - 0.05 * np.cos(bend), 0.1))
+    mask = (V[:, 0] <= 0.2) | (V[:, 0] >= 0.8)
+    none = np.zeros((0, 2), dtype=np.int64)
+    return V, F, RepairProblem.build(V, T, F, mask, [none, none])
+
+
+def test_the_distortion_metric_flags_the_snap_stretching_a_fold_and_not_the_contact_finish():
+    """The field left the fold behind (the integrated pose is the flat strip): the snap puts the tip on its
+    target and blends the rest, stretching the middle; the contact finish folds it as the target."""
+    V, F, problem = _folded_strip(0.5)
+    rests = {"target": problem.V_tgt, "reference": V}
+    snap = repair_pose(problem, V, 1.0, 1e-4, 1.0)  # the fit's error lets the snap reach the tip's target
+    flagged = distortion_summary(snap.X, rests, F)
+    assert snap.metrics["repaired_new"] == 0 and flagged["faces_over"] > 0 and flagged["edge_target"] > 4.0
+    contact = finish_pose(problem, np.stack([V, V]), 1.0, ContactSolver(V, F))
+    clean = distortion_summary(contact.X, rests, F)
+    assert contact.metrics["repaired_new"] == 0 and clean["faces_over"] == 0 and clean["edge_target"] < 1.01
+
+
+def test_a_finish_that_crushes_the_strip_past_ccd_is_reverted_to_an_intersection_free_sample():
+    """Folded at x = 0.35 the tip's target lies beyond the base: one straight Newton solve from the flat strip
+    crumples it (zero-area triangles, below CCD's precision), and the result is checked and reverted."""
+    V, F, problem = _folded_strip(0.35)
+    result = finish_pose(problem, np.stack([V, V]), 1.0, ContactSolver(V, F))
+    assert result.metrics["repaired_new"] == 0 and result.metrics["contact_reverted"]
+    assert np.array_equal(result.X, V) and not (result.replaced & CONTACT).any()  # the intersection-free sample

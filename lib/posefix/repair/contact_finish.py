@@ -12,6 +12,10 @@ toward its goal, through intersection-free shapes only (:mod:`posefix.mesh.conta
    new contact open.
 4. **Exact V_C**: constrained vertices of no barrier pair are put exactly on their targets where CCD
    allows the (small) move.
+5. **Check**: the exact detector checks the result. CCD bounds every step, but degenerate steps (a straight
+   Newton step that crushes triangles to zero area, where Additive CCD warns of gaps below its precision)
+   can miss a crossing; then the finish is reverted to the latest intersection-free sample of the path
+   lines (``contact_reverted``) and says so.
 """
 
 import logging
@@ -91,12 +95,18 @@ def contact_finish(problem, solver, samples, settings=FinishSettings()):
     weights = np.where(problem.mask, settings.constrained_weight, 1.0)
     result = solver.compute_pose(start, goal, weights)
     X, exact = _exact_constrained(problem, solver, result)
+    reverted = bool(new_faces(problem, X).any())
+    if reverted:
+        clean = samples[len(samples) - 1 - tracked]
+        log.warning("contact finish: the result has new intersecting faces (a step CCD could not bound); reverted "
+                    "to the latest intersection-free sample of the path lines")
+        X, exact, result.contact = clean, problem.mask & (clean == problem.V_tgt).all(axis=1), np.zeros(len(X), bool)
     log.info("contact finish from %s: %d Newton iterations (%s), %d of %d constrained vertices exact, %d vertices "
              "in contact", label, result.iterations, "converged" if result.converged else "not converged",
              exact.sum(), problem.mask.sum(), result.contact.sum())
     metrics = {"contact_iterations": result.iterations + iterations, "contact_converged": bool(result.converged),
                "contact_samples_tracked": tracked, "contact_vertices": int(result.contact.sum()),
-               "contact_dhat_rel": solver.dhat / solver.d}
+               "contact_dhat_rel": solver.dhat / solver.d, "contact_reverted": reverted}
     return FinishResult(X, exact, result.contact, label, metrics | {"contact_seconds": time.perf_counter() - t0})
 
 
