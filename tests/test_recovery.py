@@ -73,9 +73,9 @@ def test_adding_a_pose_plans_only_that_pose_and_a_code_change_only_what_it_chang
     write_mesh(library / "ball-04.obj", V * SHAPES["ball-04"], F)
     jobs = planned(checkout, tmp_path, *config)
     per_pose = {"validate", "keyframes", "classify", "constraints", "fit", "integrate", "verify", "export",
-                "downstream", "render", "repair_medial", "repair_volumetric"}
+                "downstream", "render", "repair_medial", "repair_volumetric", "repair_contact"}
     assert set(jobs) == per_pose | {"export_baseline", "summary", "overview", "all"}
-    assert all(jobs[rule] == 1 for rule in per_pose) and jobs["export_baseline"] == 2
+    assert all(jobs[rule] == 1 for rule in per_pose) and jobs["export_baseline"] == 3
     proc = run(checkout, tmp_path, *config)
     assert proc.returncode == 0, proc.stderr[-3000:]
     # a comment in the library module of the verify stage: verify and what reads its output rerun, nothing else

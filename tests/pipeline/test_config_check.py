@@ -23,7 +23,7 @@ def test_every_problem_is_one_line_naming_its_key():
     config["keyframs"] = {}
     config["baselines"] = ["medial", "volumetrc"]
     assert config_problems(config, SCHEMA) == [
-        "baselines.1: 'volumetrc' is not one of 'medial', 'volumetric'",
+        "baselines.1: 'volumetrc' is not one of 'medial', 'volumetric', 'contact'",
         "fit.max_centres: unknown key (did you mean 'max_centers'?)",
         "integrate.device: 'tpu' is not one of 'auto', 'cpu', 'gpu', 'numpy'",
         "keyframes.count: 1 is less than the minimum of 2",
