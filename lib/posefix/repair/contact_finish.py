@@ -63,6 +63,8 @@ class FinishResult:
         ``integrated`` or ``sample <k>`` (the latest intersection-free sample, carried along the rest).
     metrics : dict
         Newton iterations (``contact_iterations``), convergence, start samples tracked, seconds.
+    pairs : (P, 2) int
+        Intersecting face pairs of ``X`` (the exact detector's check, reused by the verification).
     """
 
     X: np.ndarray
@@ -70,6 +72,7 @@ class FinishResult:
     contact: np.ndarray
     start: str
     metrics: dict
+    pairs: np.ndarray
 
 
 def contact_finish(problem, solver, samples, settings=FinishSettings()):
@@ -95,19 +98,22 @@ def contact_finish(problem, solver, samples, settings=FinishSettings()):
     weights = np.where(problem.mask, settings.constrained_weight, 1.0)
     result = solver.compute_pose(start, goal, weights)
     X, exact = _exact_constrained(problem, solver, result)
-    reverted = bool(new_faces(problem, X).any())
+    pairs = self_intersecting_pairs(X, problem.F)
+    reverted = bool((intersecting_faces(pairs, len(problem.F)) & ~problem.reference_faces).any())
     if reverted:
         clean = samples[len(samples) - 1 - tracked]
         log.warning("contact finish: the result has new intersecting faces (a step CCD could not bound); reverted "
                     "to the latest intersection-free sample of the path lines")
         X, exact, result.contact = clean, problem.mask & (clean == problem.V_tgt).all(axis=1), np.zeros(len(X), bool)
+        pairs = self_intersecting_pairs(X, problem.F)
     log.info("contact finish from %s: %d Newton iterations (%s), %d of %d constrained vertices exact, %d vertices "
              "in contact", label, result.iterations, "converged" if result.converged else "not converged",
              exact.sum(), problem.mask.sum(), result.contact.sum())
     metrics = {"contact_iterations": result.iterations + iterations, "contact_converged": bool(result.converged),
                "contact_samples_tracked": tracked, "contact_vertices": int(result.contact.sum()),
                "contact_dhat_rel": solver.dhat / solver.d, "contact_reverted": reverted}
-    return FinishResult(X, exact, result.contact, label, metrics | {"contact_seconds": time.perf_counter() - t0})
+    return FinishResult(X, exact, result.contact, label, metrics | {"contact_seconds": time.perf_counter() - t0},
+                        pairs)
 
 
 def new_faces(problem, X):

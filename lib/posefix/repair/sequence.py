@@ -161,16 +161,18 @@ def finish_pose(problem, samples, d, solver, settings=FinishSettings()):
     integrated = deviation(samples[-1], problem.V_tgt, problem.mask, d)
     finish = contact_finish(problem, solver, samples, settings)
     replaced = finish.exact * np.uint8(REPRODUCED) | finish.contact * np.uint8(CONTACT)
-    result = _verified(problem, finish.X, replaced, integrated, d, {"contact": finish.metrics["contact_seconds"]})
+    result = _verified(problem, finish.X, replaced, integrated, d, {"contact": finish.metrics["contact_seconds"]},
+                       finish.pairs)
     result.metrics |= {k: v for k, v in finish.metrics.items() if k != "contact_seconds"}
     return result
 
 
-def _verified(problem, X, replaced, integrated, d, seconds):
+def _verified(problem, X, replaced, integrated, d, seconds, pairs=None):
     """The :class:`RepairResult` of a finished pose ``X`` with its flags; ``integrated``: the integrated pose's
-    (deviation, summary); ``seconds``: the finish's, ``verify`` added."""
+    (deviation, summary); ``seconds``: the finish's, ``verify`` added; ``pairs``: ``X``'s intersecting face pairs
+    when the finish has them."""
     t0 = time.perf_counter()
-    pairs = self_intersecting_pairs(X, problem.F)
+    pairs = self_intersecting_pairs(X, problem.F) if pairs is None else pairs
     faces = intersecting_faces(pairs, len(problem.F))
     dev, summary = deviation(X, problem.V_tgt, problem.mask, d)
     seconds = seconds | {"verify": time.perf_counter() - t0}
