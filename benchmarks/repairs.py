@@ -5,7 +5,7 @@ targets: space-time integration (S0) with the snap finish and with the contact f
 ``verify.finish``), the medial repair (S1's balls and flow), the volumetric fill (S4's editor) and the contact
 repair (the IPC contact solver through S0's key frames). The pipeline runs twice per library in one go: with
 the contact finish and every baseline (results/<library>), then with the snap finish alone
-(results/<library>-snap-finish), the downstream check towards every repaired pose both times
+(results/<library>-snap-finish, from the first run's artifacts up to integrate), the downstream check towards every repaired pose both times
 (``downstream.baselines: true``; Snakemake reuses what is up to date; ``--quick-downstream``: one setting of
 the grid, alpha 1 and k_b 1e-2, as ``make run``). One table from the summary.json files:
 poses with no new intersecting face (S0's snap: outside its pass-through regions), poses "ok" (clean, V_C
@@ -49,6 +49,23 @@ def run_library(lib, cores, out, extra=(CHECK_BASELINES,), suffix=""):
     subprocess.run(cmd, cwd=ROOT, check=True)
     shutil.copyfile(ROOT / "reports" / name / "summary.md", out / f"summary-{name}.md")
     return json.loads((ROOT / "reports" / name / "summary.json").read_text())["poses"]
+
+
+UPSTREAM = ("validate", "keyframes", "classify", "constraints", "fit", "integrate")
+"""S0's stages before verify: the snap run takes them from the contact run (same inputs, same config)."""
+
+
+def seed_snap_run(name, suffix):
+    """Copy S0's upstream artifacts and benchmark files of results/<name> into results/<name><suffix>, with their
+    times, where missing or older: the snap run then computes verify and what follows only."""
+    source, dest = ROOT / "results" / name, ROOT / "results" / (name + suffix)
+    files = [source / "reference.h5"] + [f for stage in UPSTREAM for f in source.glob(f"*/{stage}.h5")]
+    files += [f for stage in UPSTREAM for f in (source / "benchmarks").glob(f"*/{stage}.tsv")]
+    for f in files:
+        target = dest / f.relative_to(source)
+        if not target.exists() or target.stat().st_mtime < f.stat().st_mtime:
+            target.parent.mkdir(parents=True, exist_ok=True)
+            shutil.copy2(f, target)
 
 
 def finish_seconds(name, poses):
@@ -195,6 +212,7 @@ def main():
     for lib in libraries:
         name = lib.name if lib else "demo"
         contact = run_library(lib, args.cores, out, [check, CONTACT_FINISH])
+        seed_snap_run(name, "-snap-finish")
         snap = run_library(lib, args.cores, out, [check, *SNAP_FINISH], "-snap-finish")
         rows = method_rows(contact, snap)
         rows["finish_seconds"] = finish_seconds(name, [e["pose"] for e in contact])
@@ -203,10 +221,10 @@ def main():
         rows["library_seconds"] = {stage: benchmark_seconds(ROOT / "results" / name / "benchmarks", stage) or 0.0
                                    for stage in LIBRARY_STAGES.values()}
         result["libraries"][name] = rows
-    result["seconds"] = time.perf_counter() - start
-    (out / "repairs.md").write_text("\n".join(markdown(result) + finish_markdown(result)))
-    (out / "repairs.json").write_text(json.dumps(result, indent=1))
-    print(f"wrote {out / 'repairs.md'}")
+        result["seconds"] = time.perf_counter() - start
+        (out / "repairs.md").write_text("\n".join(markdown(result) + finish_markdown(result)))
+        (out / "repairs.json").write_text(json.dumps(result, indent=1))
+        print(f"wrote {out / 'repairs.md'} ({', '.join(result['libraries'])})", flush=True)
 
 
 if __name__ == "__main__":

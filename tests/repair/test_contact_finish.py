@@ -71,6 +71,16 @@ def test_the_contact_finish_metrics_are_the_documented_ones():
     assert set(metrics) == {n for token in re.findall(r"`([a-z_{},0-9]+)`", listed) for n in _expand(token)}
 
 
+def _fold(V, hinge, angle, radius=0.05):
+    """The flat strip ``V`` folded up by ``angle`` (radians) at x = ``hinge`` round a hinge of ``radius``."""
+    s = V[:, 0] - hinge
+    bend, beyond = np.clip(s / radius, 0, angle), np.maximum(s - radius * angle, 0)
+    T = V.copy()
+    T[:, 0] = np.where(s <= 0, V[:, 0], hinge + radius * np.sin(bend) + beyond * np.cos(angle))
+    T[:, 2] = np.where(s <= 0, 0.0, radius * (1 - np.cos(bend)) + beyond * np.sin(angle))
+    return T
+
+
 def _folded_strip(hinge):
     """A 1 x 0.15 strip (21 x 4 vertices) and its target folded back over itself at x = ``hinge`` (a round hinge
     of radius 0.05, the tip 0.1 above the base); V_C: both ends (x <= 0.2 and x >= 0.8)."""
@@ -78,35 +88,30 @@ def _folded_strip(hinge):
     V = np.column_stack([x.ravel(), y.ravel(), np.zeros(x.size)])
     F = np.array([[i * 4 + j, (i + 1) * 4 + j, (i + 1) * 4 + j + 1] for i in range(20) for j in range(3)]
                  + [[i * 4 + j, (i + 1) * 4 + j + 1, i * 4 + j + 1] for i in range(20) for j in range(3)])
-    s = V[:, 0] - hinge
-    bend = np.clip(s / 0.05, 0, np.pi)
-    T = V.copy()
-    T[:, 0] = np.where(s <= 0, V[:, 0], np.where(s < 0.05 * np.pi, hinge + 0.05 * np.sin(bend),
-                                                  hinge - (s - 0.05 * np.pi)))
-    T[:, 2] = np.where(s <= 0, 0.0, np.where(s < 0.05 * np.pi, 0.05 - 0.05 * np.cos(bend), 0.1))
     mask = (V[:, 0] <= 0.2) | (V[:, 0] >= 0.8)
     none = np.zeros((0, 2), dtype=np.int64)
-    return V, F, RepairProblem.build(V, T, F, mask, [none, none])
+    return V, F, RepairProblem.build(V, _fold(V, hinge, np.pi), F, mask, [none, none])
 
 
 def test_the_distortion_metric_flags_the_snap_stretching_a_fold_and_not_the_contact_finish():
-    """The field left the fold behind (the integrated pose is the flat strip): the snap puts the tip on its
-    target and blends the rest, stretching the middle; the contact finish folds it as the target."""
+    """The field left the fold behind (the path lines fold the tip up by 18 degrees of 180): the snap puts the tip
+    on its target and blends the rest, stretching the middle; the contact finish folds it as the target."""
     V, F, problem = _folded_strip(0.5)
+    samples = np.stack([_fold(V, 0.5, 0.1 * np.pi * k / 4) for k in range(5)])
     rests = {"target": problem.V_tgt, "reference": V}
-    snap = repair_pose(problem, V, 1.0, 1e-4, 1.0)  # the fit's error lets the snap reach the tip's target
+    snap = repair_pose(problem, samples[-1], 1.0, 1e-4, 1.0)  # the fit's error lets the snap reach the tip's target
     flagged = distortion_summary(snap.X, rests, F)
     assert snap.metrics["repaired_new"] == 0 and flagged["faces_over"] > 0 and flagged["edge_target"] > 4.0
-    contact = finish_pose(problem, np.stack([V, V]), 1.0, ContactSolver(V, F))
+    contact = finish_pose(problem, samples, 1.0, ContactSolver(V, F))
     clean = distortion_summary(contact.X, rests, F)
     assert contact.metrics["repaired_new"] == 0 and clean["faces_over"] == 0 and clean["edge_target"] < 1.01
 
 
 def test_a_finish_that_crushes_the_strip_past_ccd_is_reverted_to_an_intersection_free_sample():
-    """Folded at x = 0.35 the tip's target lies beyond the base: one straight Newton solve from the flat strip
-    crumples it (zero-area triangles, below CCD's precision), and the result is checked and reverted."""
+    """Folded at x = 0.35 the tip's target lies beyond the base: with the smallest barrier distance, one straight
+    Newton solve from the flat strip crumples it (zero-area triangles, below CCD's precision), and the result is checked and reverted."""
     V, F, problem = _folded_strip(0.35)
-    solver = ContactSolver(V, F, settings=ContactSettings(max_iterations=40))  # crossed by then (200: 10x longer)
+    solver = ContactSolver(V, F, settings=ContactSettings(dhat=2e-4, tolerance=1e-4, max_iterations=40))  # crossed by then
     result = finish_pose(problem, np.stack([V, V]), 1.0, solver)
     assert result.metrics["repaired_new"] == 0 and result.metrics["contact_reverted"]
     assert np.array_equal(result.X, V) and not (result.replaced & CONTACT).any()  # the intersection-free sample

@@ -6,11 +6,14 @@ from posefix.mesh.contact_solver import ContactSettings
 
 
 def add_contact_options(parser):
-    """Add ``--dhat``, ``--touching``, ``--smoothing``, ``--tolerance`` and ``--max-iterations`` (defaults: the
+    """Add ``--dhat``, ``--dhat-min``, ``--touching``, ``--smoothing``, ``--tolerance`` and ``--max-iterations`` (defaults: the
     library's :class:`ContactSettings`) to ``parser`` (argparse.ArgumentParser)."""
     contact = ContactSettings()
     group = parser.add_argument_group("contact solver (config contact; lengths / bbox diagonal)")
-    group.add_argument("--dhat", type=float, default=contact.dhat, help="barrier activation distance")
+    group.add_argument("--dhat", type=float, default=contact.dhat,
+                       help="largest barrier activation distance (half the reference's clearance when smaller)")
+    group.add_argument("--dhat-min", type=float, default=contact.dhat_min,
+                       help="smallest barrier activation distance (parts closer at rest feel the barrier)")
     group.add_argument("--touching", type=float, default=contact.touching,
                        help="pairs of the reference closer than this are tolerated (touching at rest)")
     group.add_argument("--smoothing", type=float, default=contact.smoothing,
@@ -23,5 +26,6 @@ def add_contact_options(parser):
 
 def contact_settings(args):
     """(ContactSettings, dict of its fields) from the options of :func:`add_contact_options`."""
-    settings = ContactSettings(args.dhat, args.touching, args.smoothing, args.tolerance, args.max_iterations)
+    settings = ContactSettings(dhat=args.dhat, dhat_min=args.dhat_min, touching=args.touching,
+                               smoothing=args.smoothing, tolerance=args.tolerance, max_iterations=args.max_iterations)
     return settings, asdict(settings)
