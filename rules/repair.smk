@@ -13,6 +13,7 @@ rule verify:
         finish=config["verify"]["finish"],
         free_goal=config["verify"]["free_goal"],
         weight=config["verify"]["constrained_weight"],
+        untangle=config["verify"]["untangle_rings"],
         contact=" ".join(
             f"--{key.replace('_', '-')} {value}" for key, value in config["contact"].items()
         ),
@@ -37,7 +38,8 @@ rule verify:
     shell:
         "{params.python:q} {params.script:q} --keyframes {input.keyframes:q} --classify {input.classify:q}"
         " --integrate {input.integrate:q} --fit {input.fit:q} --finish {params.finish}"
-        " --free-goal {params.free_goal} --constrained-weight {params.weight} {params.contact}"
+        " --free-goal {params.free_goal} --constrained-weight {params.weight}"
+        " --untangle-rings {params.untangle} {params.contact}"
         " --fallback-eps {params.fallback}"
         " --fallback-fit {params.fallback_fit}"
         " --ring {params.ring} --max-rings {params.rings} {params.switches}"

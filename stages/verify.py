@@ -54,6 +54,9 @@ def build_parser():
                         "blended V_C residual)")
     parser.add_argument("--constrained-weight", type=float, default=finish.constrained_weight,
                         help="contact finish: weight of V_C on its targets relative to the free region's")
+    parser.add_argument("--untangle-rings", type=int, default=finish.untangle_rings,
+                        help="contact finish: most rings (0, 1, 2, 4, ...) around the reference's own intersections "
+                        "that the target has undone, put onto the target")
     parser.add_argument("--fallback-eps", type=float, default=defaults.fallback_eps,
                         help="vertices farther than this many eps from their targets have not reached them")
     parser.add_argument("--fallback-fit", type=float, default=defaults.fallback_fit,
@@ -102,7 +105,7 @@ def _finish(args, problem, integrated, fit_attrs, settings):
                              settings)
         return result, asdict(settings)
     contact, contact_params = contact_settings(args)
-    finish = FinishSettings(args.free_goal, args.constrained_weight)
+    finish = FinishSettings(args.free_goal, args.constrained_weight, args.untangle_rings)
     solver = ContactSolver(problem.V_ref, problem.F, problem.reference_faces, contact, args.threads)
     result = finish_pose(problem, integrated["samples"], d, solver, finish)
     return result, {"finish": "contact"} | asdict(finish) | contact_params

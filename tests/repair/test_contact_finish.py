@@ -9,7 +9,7 @@ from posefix.mesh.contact_solver import ContactSettings, ContactSolver
 from posefix.mesh.distortion import distortion_summary
 from posefix.mesh.intersections import intersecting_faces, self_intersecting_pairs
 from posefix.mesh.rotations import rotation_exp
-from posefix.repair.flags import CONTACT, REPRODUCED
+from posefix.repair.flags import CONTACT, REPLACED_NEW_INTERSECTION, REPRODUCED
 from posefix.repair.sequence import finish_pose, repair_pose
 from posefix.repair.state import RepairProblem
 from test_sequence import _expand
@@ -115,3 +115,22 @@ def test_a_finish_that_crushes_the_strip_past_ccd_is_reverted_to_an_intersection
     result = finish_pose(problem, np.stack([V, V]), 1.0, solver)
     assert result.metrics["repaired_new"] == 0 and result.metrics["contact_reverted"]
     assert np.array_equal(result.X, V) and not (result.replaced & CONTACT).any()  # the intersection-free sample
+
+
+def test_where_the_target_undoes_the_references_own_intersection_that_region_takes_the_target():
+    """A 5 x 5 sheet stands through a 9 x 9 one in the reference (tolerated) and clear of it in the target (moved
+    0.8 along x, past its edge): no intersection-free motion from the integrated pose (the reference) slides it
+    out through the other sheet's clean faces, so the region around the reference's own intersection, grown by
+    rings until it adds none, takes the target's positions (flag 2)."""
+    A, FA = grid_sheet(9, 0.0)
+    U, FB = grid_sheet(5, 0.0)
+    B = np.column_stack([np.full(len(U), 0.55), 0.3 + 0.4 * U[:, 0], -0.2 + 0.4 * U[:, 1]])
+    V, F = np.vstack([A, B]), np.vstack([FA, FB + len(A)])
+    target = V + (np.arange(len(V)) >= len(A))[:, None] * [0.8, 0.0, 0.0]
+    pairs = [self_intersecting_pairs(P, F) for P in (V, target)]
+    assert len(pairs[0]) > 0 and len(pairs[1]) == 0
+    problem = RepairProblem.build(V, target, F, np.ones(len(V), bool), pairs)
+    result = finish_pose(problem, np.stack([V, V]), 1.0, ContactSolver(V, F, problem.reference_faces))
+    assert result.metrics["repaired_new"] == 0 and result.metrics["contact_untangled"] == len(B)
+    assert np.abs(result.X - target).max() < 1e-6
+    assert ((result.replaced & REPLACED_NEW_INTERSECTION) > 0).sum() == len(B)

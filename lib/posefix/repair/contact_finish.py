@@ -11,7 +11,10 @@ toward its goal, through intersection-free shapes only (:mod:`posefix.mesh.conta
 3. **Solve** with ``V_C`` weighted ``constrained_weight`` and the free region 1; the barrier keeps every
    new contact open.
 4. **Exact V_C**: constrained vertices of no barrier pair are put exactly on their targets where CCD
-   allows the (small) move.
+   allows the (small) move. The constrained vertices of the reference's own intersecting faces (which the
+   integrated pose inherits; the target may have undone them) are pulled with the free region's weight, as no
+   intersection-free motion need reach them, and put on their targets in one step where the exact detector
+   finds no new intersecting face, with the rings around them that this needs (flag 2).
 5. **Check**: the exact detector checks the result. CCD bounds every step, but degenerate steps (a straight
    Newton step that crushes triangles to zero area, where Additive CCD warns of gaps below its precision)
    can miss a crossing; then the finish is reverted to the latest intersection-free sample of the path
@@ -27,6 +30,7 @@ import numpy as np
 from posefix.mesh.contact_solver import WAYPOINT_TOLERANCE
 from posefix.mesh.harmonic import biharmonic_extension
 from posefix.mesh.intersections import intersecting_faces, self_intersecting_pairs
+from posefix.mesh.topology import grow_rings
 
 log = logging.getLogger(__name__)
 
@@ -42,10 +46,14 @@ class FinishSettings:
         deviation and fewer distorted faces, for 1-3x the Newton iterations.
     constrained_weight : float
         Weight of ``V_C`` on its targets, relative to the free region's 1.
+    untangle_rings : int
+        Most rings grown (0, 1, 2, 4, ...) around the reference's own intersections where the target has undone
+        them: the region then takes the target's positions (cat-09: 7 rings).
     """
 
     free_goal: str = "target"
     constrained_weight: float = 1e6
+    untangle_rings: int = 16
 
 
 @dataclass
@@ -59,6 +67,8 @@ class FinishResult:
         Constrained vertices exactly on their targets.
     contact : (n,) bool
         Vertices of a barrier pair at the end (held off their goals by a contact).
+    untangled : (n,) bool
+        Vertices moved onto the target where it has undone the reference's own intersections.
     start : str
         ``integrated`` or ``sample <k>`` (the latest intersection-free sample, carried along the rest).
     metrics : dict
@@ -70,6 +80,7 @@ class FinishResult:
     X: np.ndarray
     exact: np.ndarray
     contact: np.ndarray
+    untangled: np.ndarray
     start: str
     metrics: dict
     pairs: np.ndarray
@@ -95,25 +106,28 @@ def contact_finish(problem, solver, samples, settings=FinishSettings()):
     t0 = time.perf_counter()
     start, label, tracked, iterations = _intersection_free_start(problem, solver, samples)
     goal = _goal(problem, samples[-1], settings.free_goal)
-    weights = np.where(problem.mask, settings.constrained_weight, 1.0)
+    locked = _locked_vertices(problem)
+    weights = np.where(problem.mask & ~locked, settings.constrained_weight, 1.0)
     result = solver.compute_pose(start, goal, weights)
-    X, exact = _exact_constrained(problem, solver, result)
+    X, exact = _exact_constrained(problem, solver, result, locked)
+    X, exact, untangled = _untangled(problem, X, exact, locked, settings.untangle_rings)
     pairs = self_intersecting_pairs(X, problem.F)
     reverted = bool((intersecting_faces(pairs, len(problem.F)) & ~problem.reference_faces).any())
     if reverted:
-        clean = samples[len(samples) - 1 - tracked]
+        X = samples[len(samples) - 1 - tracked]
         log.warning("contact finish: the result has new intersecting faces (a step CCD could not bound); reverted "
                     "to the latest intersection-free sample of the path lines")
-        X, exact, result.contact = clean, problem.mask & (clean == problem.V_tgt).all(axis=1), np.zeros(len(X), bool)
-        pairs = self_intersecting_pairs(X, problem.F)
+        exact, untangled = problem.mask & (X == problem.V_tgt).all(axis=1), np.zeros(len(X), bool)
+        result.contact, pairs = np.zeros(len(X), bool), self_intersecting_pairs(X, problem.F)
     log.info("contact finish from %s: %d Newton iterations (%s), %d of %d constrained vertices exact, %d vertices "
              "in contact", label, result.iterations, "converged" if result.converged else "not converged",
              exact.sum(), problem.mask.sum(), result.contact.sum())
     metrics = {"contact_iterations": result.iterations + iterations, "contact_converged": bool(result.converged),
                "contact_samples_tracked": tracked, "contact_vertices": int(result.contact.sum()),
-               "contact_dhat_rel": solver.dhat / solver.d, "contact_reverted": reverted}
-    return FinishResult(X, exact, result.contact, label, metrics | {"contact_seconds": time.perf_counter() - t0},
-                        pairs)
+               "contact_untangled": int(untangled.sum()), "contact_dhat_rel": solver.dhat / solver.d,
+               "contact_reverted": reverted}
+    return FinishResult(X, exact, result.contact, untangled, label,
+                        metrics | {"contact_seconds": time.perf_counter() - t0}, pairs)
 
 
 def new_faces(problem, X):
@@ -147,9 +161,45 @@ def _goal(problem, X_int, free_goal):
     return goal
 
 
-def _exact_constrained(problem, solver, result):
-    """Put the constrained vertices of no barrier pair exactly on their targets if CCD allows the move."""
-    exact = problem.mask & ~result.contact
+def _locked_vertices(problem):
+    """Constrained vertices of the reference's own intersecting faces that the target has undone (they do not
+    intersect there), (n,) bool. The integrated pose inherits those intersections, and no motion that keeps the
+    intersection-free set need reach the targets of these vertices (cat: a paw through the other); pulled with
+    V_C's weight they crushed the faces around them (cat-05: an edge 345x its length, V_C 1.4e-2 d off)."""
+    locked = np.zeros(len(problem.mask), dtype=bool)
+    locked[problem.F[problem.reference_faces & ~problem.target_faces].ravel()] = True
+    return locked & problem.mask
+
+
+def _untangled(problem, X, exact, locked, most):
+    """Put the region of the reference's own intersections where the target has undone them onto the target.
+
+    The vertices of the reference's intersecting faces that the target has undone (:func:`_locked_vertices`), grown
+    by 0, 1, 2, 4, ... rings until the exact
+    detector finds no new intersecting face (at most ``most``), move onto their targets in one step (cat-05:
+    2 rings). Returns ``(X (n, 3), exact (n,) bool, untangled (n,) bool)``: unchanged when no ring works."""
+    none = np.zeros(len(X), dtype=bool)
+    if not (locked & ~exact).any():
+        return X, exact, none
+    seed = none.copy()
+    seed[problem.F[problem.reference_faces & ~problem.target_faces].ravel()] = True
+    for rings in sorted({0, most} | {2 ** k for k in range(most.bit_length()) if 2 ** k <= most}):
+        region = grow_rings(seed, problem.A, rings)
+        Y = X.copy()
+        Y[region] = problem.V_tgt[region]
+        if not new_faces(problem, Y).any():
+            log.info("contact finish: the target has undone the reference's own intersections; %d vertices (%d "
+                     "rings) take the target's positions", region.sum(), rings)
+            return Y, exact | (region & problem.mask), region & (X != Y).any(axis=1)
+    log.info("contact finish: %d constrained vertices of the reference's own intersecting faces stay off their "
+             "targets (%d rings of the target intersect)", (locked & ~exact).sum(), most)
+    return X, exact, none
+
+
+def _exact_constrained(problem, solver, result, locked):
+    """Put the constrained vertices of no barrier pair, not ``locked`` (n,), exactly on their targets if CCD
+    allows the move."""
+    exact = problem.mask & ~result.contact & ~locked
     Y = result.X.copy()
     Y[exact] = problem.V_tgt[exact]
     step = solver.collision_free_step(result.X, Y)

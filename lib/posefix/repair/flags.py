@@ -32,7 +32,8 @@ FLAGS = (
     Flag(REPLACED_PASS_THROUGH, "pass-through: target",
          "target (key frames pass through each other and integration did not reach the target, S0 Fig. 9)"),
     Flag(REPLACED_NEW_INTERSECTION, "new intersection: target",
-         "target (the region had new intersecting faces that the target does not have)"),
+         "target (the region had intersecting faces that the target does not have: new ones, or in the contact "
+         "finish the reference's own where the target has undone them)"),
     Flag(SMOOTHED, "smoothed", "smoothed (unconstrained vertex, to untangle new intersecting faces)"),
     Flag(RIGID_REFERENCE, "rigid reference",
          "rigid reference (the reference's shape of the region moved rigidly onto it, to untangle new intersecting "

@@ -27,7 +27,7 @@ from posefix.mesh.intersections import intersecting_faces, self_intersecting_pai
 from posefix.repair.contact_finish import FinishSettings, contact_finish
 from posefix.repair.deviation import deviation
 from posefix.repair.fallback import fallback
-from posefix.repair.flags import CONTACT, PUSHED, REPRODUCED, flag_counts
+from posefix.repair.flags import CONTACT, PUSHED, REPLACED_NEW_INTERSECTION, REPRODUCED, flag_counts
 from posefix.repair.reproduce import reproduce_targets
 
 log = logging.getLogger(__name__)
@@ -156,11 +156,13 @@ def finish_pose(problem, samples, d, solver, settings=FinishSettings()):
     -------
     RepairResult
         Flags: ``REPRODUCED`` on the constrained vertices exactly on their targets, ``CONTACT`` on the vertices
-        a contact holds off their goals; the metrics add the finish's (:func:`contact_finish`).
+        a contact holds off their goals, ``REPLACED_NEW_INTERSECTION`` where the target undid the reference's own
+        intersections; the metrics add the finish's (:func:`contact_finish`).
     """
     integrated = deviation(samples[-1], problem.V_tgt, problem.mask, d)
     finish = contact_finish(problem, solver, samples, settings)
-    replaced = finish.exact * np.uint8(REPRODUCED) | finish.contact * np.uint8(CONTACT)
+    replaced = (finish.exact * np.uint8(REPRODUCED) | finish.contact * np.uint8(CONTACT)
+                | finish.untangled * np.uint8(REPLACED_NEW_INTERSECTION))
     result = _verified(problem, finish.X, replaced, integrated, d, {"contact": finish.metrics["contact_seconds"]},
                        finish.pairs)
     result.metrics |= {k: v for k, v in finish.metrics.items() if k != "contact_seconds"}
