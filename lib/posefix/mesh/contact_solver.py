@@ -175,15 +175,16 @@ class ContactSolver:
         ipctk.set_logger_level(ipctk.LoggerLevel.warn)
         V_ref = np.asarray(V_ref, dtype=np.float64)
         self.F, self.d, self.settings = np.asarray(F, dtype=np.int32), bbox_diagonal(V_ref), settings
-        self.dhat = 2.0 * settings.dhat * self.d  # the clearance is looked for up to here
         E = ipctk.edges(self.F)
         self.mesh = ipctk.CollisionMesh(V_ref, E, self.F)
         tolerated = np.zeros(len(F), dtype=bool) if tolerated_faces is None else np.asarray(tolerated_faces, bool)
         self.tolerated = tolerated_primitives(self.F, E, self.mesh.faces_to_edges, tolerated, len(V_ref))
         self._touching = (np.zeros(0, np.int64), np.zeros(0, np.int64))
-        self._touching, self.clearance = self._touching_pairs(V_ref)
-        self.dhat = float(np.clip(0.5 * self.clearance, settings.dhat_min * self.d, settings.dhat * self.d))
+        self._touching = self._touching_pairs(V_ref)
         self._sub = self._tolerated_region(V_ref, E)
+        self.dhat = 2.0 * settings.dhat * self.d  # the clearance is looked for up to here
+        self.clearance = min(self.min_distance(V_ref), self.dhat)
+        self.dhat = float(np.clip(0.5 * self.clearance, settings.dhat_min * self.d, settings.dhat * self.d))
         self.barrier = ipctk.BarrierPotential(self.dhat, 1.0)
         self._smoothness = _smoothness(V_ref, self.F, settings.smoothing * self.d)
         pattern = self._smoothness[1] + sp.identity(len(V_ref))
@@ -194,19 +195,17 @@ class ContactSolver:
                  self.clearance / self.d, self.dhat / self.d)
 
     def _touching_pairs(self, V):
-        """((edge-pair keys, face-vertex keys) of the non-tolerated pairs closer than ``touching * d`` at ``V``, the
-        smallest distance of the others below ``dhat``, or ``dhat``): before the broad phase's filter is set."""
+        """(edge-pair keys, face-vertex keys) of the non-tolerated pairs closer than ``touching * d`` at ``V``: before
+        the broad phase's filter is set."""
+        limit = self.settings.touching * self.d
         c = ipctk.Candidates()
-        c.build(self.mesh, V, self.dhat)
+        c.build(self.mesh, V, limit)
         (ee, ee_keys), (fv, fv_keys) = self._pairs(c)
         keep_ee, keep_fv = self._kept(ee, ee_keys, fv, fv_keys)
         E, F = self.mesh.edges, self.mesh.faces
         ee_dist = np.sqrt([k.compute_distance(V, E, F) for k, keep in zip(c.ee_candidates, keep_ee) if keep])
         fv_dist = np.sqrt([k.compute_distance(V, E, F) for k, keep in zip(c.fv_candidates, keep_fv) if keep])
-        limit = self.settings.touching * self.d
-        touching = (np.unique(ee_keys[keep_ee][ee_dist < limit]), np.unique(fv_keys[keep_fv][fv_dist < limit]))
-        apart = np.concatenate([ee_dist[ee_dist >= limit], fv_dist[fv_dist >= limit]])
-        return touching, float(apart.min()) if len(apart) else self.dhat
+        return np.unique(ee_keys[keep_ee][ee_dist < limit]), np.unique(fv_keys[keep_fv][fv_dist < limit])
 
     def _tolerated_region(self, V, E):
         """Set the broad phase's filter and return the tolerated region's own collision mesh (None if none).

@@ -57,7 +57,7 @@ class RepairSettings:
         Snap; False keeps the integrated positions of ``V_C``.
     """
 
-    finish: str = "snap"
+    finish: str = "contact"
     fallback_eps: float = 100.0
     fallback_fit: float = 2.0
     ring: int = 1
