@@ -44,6 +44,9 @@ _CCD = ipctk.AdditiveCCD()
 """Additive CCD (Li et al. 2021, conservative advancement): on the lion poses about half the time and two thirds
 of the Newton iterations of Tight-Inclusion CCD (1e-6 tolerance, 1000 iterations), both conservative."""
 
+STEP_GROWTH = 4.0
+"""How much farther than the last step that CCD cut the next line search looks (see ``_Newton._line_search``)."""
+
 WAYPOINT_TOLERANCE = 1e-3
 """Newton's stopping step / d on the waypoints of :meth:`ContactSolver.compute_path` (all but the last)."""
 
@@ -468,6 +471,7 @@ class _Newton:
         self.H0 = sp.kron(self.system.Q, sp.identity(3), format="csr")
         self.kappa = None
         self.kappa_max = None
+        self.reach = np.inf
 
     def energy(self, X, C):
         u = (X - self.goal).ravel()
@@ -517,9 +521,16 @@ class _Newton:
 
     def _line_search(self, X, dx, C):
         """``(X, collisions, accepted)`` after the largest step ``alpha dx`` that CCD allows and that lowers the
-        energy, halving from there."""
+        energy, halving from there.
+
+        CCD looks no farther than :data:`STEP_GROWTH` times the last step that CCD cut (or farther each time it
+        cuts none): its broad phase grows with the swept length (cat-04: Newton steps of 0.1 d, 3 million candidate
+        pairs, CCD allowing 1 % of them)."""
         s = self.s
-        alpha = s.collision_free_step(X, X + dx)
+        length = float(np.abs(dx).max())
+        scale = min(1.0, self.reach / length) if length > 0 else 1.0
+        alpha = scale * s.collision_free_step(X, X + scale * dx)
+        self.reach = STEP_GROWTH * (alpha * length if alpha < scale else self.reach)
         e0 = self.energy(X, C)
         while alpha > 1e-12:
             X_new = X + alpha * dx
