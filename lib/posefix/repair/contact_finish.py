@@ -175,9 +175,8 @@ def _untangled(problem, X, exact, locked, most):
     """Put the region of the reference's own intersections where the target has undone them onto the target.
 
     The vertices of the reference's intersecting faces that the target has undone (:func:`_locked_vertices`), grown
-    by 0, 1, 2, 4, ... rings until the exact
-    detector finds no new intersecting face (at most ``most``), move onto their targets in one step (cat-05:
-    2 rings). Returns ``(X (n, 3), exact (n,) bool, untangled (n,) bool)``: unchanged when no ring works."""
+    by 0, 1, 2, 4, ... rings (at most ``most``) until the exact detector finds no new intersecting face, move onto
+    their targets in one step (cat-05: 2 rings). Returns ``(X (n, 3), exact (n,) bool, untangled (n,) bool)``: unchanged when no ring works."""
     none = np.zeros(len(X), dtype=bool)
     if not (locked & ~exact).any():
         return X, exact, none
