@@ -180,7 +180,8 @@ def markdown(result):
                   "wall seconds of the stages per pose (S0: keyframes to verify; a baseline: its repair stage), "
                   "without the stages a baseline runs once per library (medial: skeleton; volumetric: tet_mesh): "
               + ", ".join(f"{n} {r['library_seconds']['skeleton']:.1f} s and {r['library_seconds']['tet_mesh']:.1f} s"
-                          for n, r in result["libraries"].items()) + ".", ""]
+                          for n, r in result["libraries"].items()) + ". Measured at commit: "
+              + ", ".join(f"{n} {r.get('commit', '?')}" for n, r in result["libraries"].items()) + ".", ""]
     return lines
 
 
@@ -191,6 +192,17 @@ def _markdown_row(library, method, m):
             f"{'-' if m['ok'] is None else m['ok']} | {m['vc_mean']:.1e} | {m['vc_max']:.1e} | {m['free_mean']:.1e} | "
             f"{m['free_max']:.1e} | {ratios} | {'-' if m['distorted'] is None else m['distorted']} | {gn} | "
             f"{m['seconds']:.1f} |")
+
+
+def _previous(path, quick_downstream):
+    """The result of an earlier run at ``path`` when it checked downstream the same way (a run of some libraries
+    replaces their rows and keeps the others'), else an empty one."""
+    result = {"libraries": {}, "quick_downstream": quick_downstream}
+    if path.exists():
+        previous = json.loads(path.read_text())
+        if previous.get("quick_downstream") == quick_downstream:
+            result["libraries"] = previous["libraries"]
+    return result
 
 
 def main():
@@ -207,7 +219,7 @@ def main():
     start = time.perf_counter()
     names = [n for n in args.libraries.split(",") if n]
     libraries = [DATA / n for n in names if n != "demo" and (DATA / n).is_dir()] + ([None] if "demo" in names else [])
-    result = {"libraries": {}, "quick_downstream": args.quick_downstream}
+    result = _previous(out / "repairs.json", args.quick_downstream)
     check = QUICK_DOWNSTREAM if args.quick_downstream else CHECK_BASELINES
     for lib in libraries:
         name = lib.name if lib else "demo"
@@ -218,6 +230,8 @@ def main():
         rows["finish_seconds"] = finish_seconds(name, [e["pose"] for e in contact])
         rows["upstream_seconds"] = {e["pose"]: repair_seconds(e) - (e["seconds_stages"].get("verify") or 0.0)
                                     for e in contact}
+        rows["commit"] = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT, capture_output=True,
+                                        text=True).stdout.strip()
         rows["library_seconds"] = {stage: benchmark_seconds(ROOT / "results" / name / "benchmarks", stage) or 0.0
                                    for stage in LIBRARY_STAGES.values()}
         result["libraries"][name] = rows

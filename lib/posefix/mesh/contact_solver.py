@@ -242,7 +242,7 @@ class ContactSolver:
         ----------
         X0, X1 : (n, 3) float
         inflation : float, optional
-            Box inflation (length units); ``dhat`` by default.
+            Box inflation (length units); ``dhat / 2`` by default (every pair that comes closer than ``dhat``).
 
         Returns
         -------
@@ -252,7 +252,7 @@ class ContactSolver:
             would copy that one through Python).
         """
         X1 = X0 if X1 is None else X1
-        inflation = self.dhat if inflation is None else inflation
+        inflation = 0.5 * self.dhat if inflation is None else inflation
         c = ipctk.Candidates()
         c.build(self.mesh, X0, X1, inflation)
         if self._sub is None:
@@ -305,11 +305,12 @@ class ContactSolver:
         sets = self.collisions(X) if collisions is None else collisions
         return min((float(np.sqrt(C.compute_minimum_distance(self.mesh, X))) for C in sets if len(C)), default=np.inf)
 
-    def collision_free_step(self, X0, X1):
+    def collision_free_step(self, X0, X1, candidates=None):
         """Largest fraction in [0, 1] of the straight move ``X0`` -> ``X1`` (n, 3) that CCD proves intersection-free
-        (non-tolerated pairs)."""
+        (non-tolerated pairs); ``candidates``: :meth:`candidates` of that move, when already built."""
+        candidates = self.candidates(X0, X1) if candidates is None else candidates
         return min((c.compute_collision_free_stepsize(self.mesh, X0, X1, 0.0, _CCD)
-                    for c in self.candidates(X0, X1) if not c.empty()), default=1.0)
+                    for c in candidates if not c.empty()), default=1.0)
 
     def contact_vertices(self, collisions, n):
         """Vertices of the pairs of ``collisions`` (a list of ipctk.NormalCollisions), (n,) bool."""
@@ -416,7 +417,7 @@ class _NewtonSystem:
         self.Q, self.orders = sp.csc_matrix(Q), orders
         p = orders[0]
         self.lu = factorized(self.Q[p][:, p], "NATURAL", symmetric=True)
-        self.W, self.column = np.zeros((Q.shape[0], 0)), {}
+        self.W, self.count, self.column = np.zeros((Q.shape[0], 0)), 0, np.full(Q.shape[0], -1)
 
     def solve_q(self, R):
         """``Q^-1 R`` for ``R`` (n, k)."""
@@ -425,14 +426,20 @@ class _NewtonSystem:
         return out
 
     def inverse_columns(self, vertices):
-        """The columns of ``Q^-1`` at ``vertices`` (m,), (n, m), computed once each."""
-        missing = [v for v in vertices.tolist() if v not in self.column]
-        if missing:
+        """Where the columns of ``Q^-1`` at ``vertices`` (m,) are in ``self.W`` (n, capacity), (m,) int: each is
+        computed once, into a buffer that doubles when full."""
+        missing = vertices[self.column[vertices] < 0]
+        if len(missing):
+            if self.count + len(missing) > self.W.shape[1]:
+                W = np.zeros((len(self.W), max(2 * self.W.shape[1], self.count + len(missing))))
+                W[:, :self.count] = self.W[:, :self.count]
+                self.W = W
             E = np.zeros((self.Q.shape[0], len(missing)))
             E[missing, np.arange(len(missing))] = 1.0
-            self.column.update((v, self.W.shape[1] + k) for k, v in enumerate(missing))
-            self.W = np.hstack([self.W, self.solve_q(E)])
-        return self.W[:, [self.column[v] for v in vertices.tolist()]]
+            self.column[missing] = self.count + np.arange(len(missing))
+            self.W[:, self.count:self.count + len(missing)] = self.solve_q(E)
+            self.count += len(missing)
+        return self.column[vertices]
 
     def solve(self, R, Hb):
         """The step ``(H0 + Hb)^-1 r`` for ``r`` as ``R`` (n, 3) and ``Hb`` sparse (3n, 3n) or 0, (n, 3)."""
@@ -445,10 +452,12 @@ class _NewtonSystem:
             return self._direct(R, Hb)
         dofs = (3 * vertices[:, None] + np.arange(3)).ravel()
         B = Hb[dofs][:, dofs]
-        W = self.inverse_columns(vertices)
-        S = np.kron(W[vertices], np.eye(3))
+        columns = self.inverse_columns(vertices)
+        S = np.kron(self.W[vertices][:, columns], np.eye(3))
         y = np.linalg.solve(np.eye(len(dofs)) + (B.T @ S.T).T, X0[vertices].ravel())
-        return X0 - W @ (B @ y).reshape(-1, 3)
+        Z = np.zeros((self.W.shape[1], 3))
+        Z[columns] = (B @ y).reshape(-1, 3)
+        return X0 - self.W @ Z
 
     def _direct(self, R, Hb):
         p = self.orders[1]
@@ -525,16 +534,18 @@ class _Newton:
 
         CCD looks no farther than :data:`STEP_GROWTH` times the last step that CCD cut (or farther each time it
         cuts none): its broad phase grows with the swept length (cat-04: Newton steps of 0.1 d, 3 million candidate
-        pairs, CCD allowing 1 % of them)."""
+        pairs, CCD allowing 1 % of them). The swept broad phase, inflated by ``dhat``, also holds every pair closer
+        than ``dhat`` anywhere on the step: the trial points' barrier pairs come from it (IPC's line search)."""
         s = self.s
         length = float(np.abs(dx).max())
         scale = min(1.0, self.reach / length) if length > 0 else 1.0
-        alpha = scale * s.collision_free_step(X, X + scale * dx)
+        swept = s.candidates(X, X + scale * dx)
+        alpha = scale * s.collision_free_step(X, X + scale * dx, swept)
         self.reach = STEP_GROWTH * (alpha * length if alpha < scale else self.reach)
         e0 = self.energy(X, C)
         while alpha > 1e-12:
             X_new = X + alpha * dx
-            C_new = s.collisions(X_new)
+            C_new = s.collisions(X_new, swept)
             if self.energy(X_new, C_new) <= e0:
                 return X_new, C_new, True
             alpha *= 0.5
