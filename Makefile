@@ -9,13 +9,17 @@ SNAKEMAKE_ARGS ?=
 RUN_CONFIG ?= downstream={'alphas': [1.0], 'k_bend': [0.01]}
 PYTEST_ARGS ?=
 
-.PHONY: run test bench lint system clean
+.PHONY: run test test-fast bench lint system clean
 
 run: $(VENV)/.installed system
 	$(VENV)/bin/snakemake --cores $(CORES) $(if $(RUN_CONFIG),--config "$(RUN_CONFIG)") $(SNAKEMAKE_ARGS)
 
 test: $(VENV)/.installed system
 	$(PY) -m pytest $(PYTEST_ARGS)
+
+# The unit tests alone, for your own loop: no end-to-end pipeline, SLURM or ../shared/data tests.
+test-fast: $(VENV)/.installed system
+	$(PY) -m pytest -m "not pipeline and not cluster and not data" $(PYTEST_ARGS)
 
 bench: $(VENV)/.installed system
 	$(PY) benchmarks/run.py --cores $(CORES)
