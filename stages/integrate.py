@@ -63,9 +63,9 @@ def main(args, log):
              device_name, args.rtol, args.atol_rel)
     with timings.step("integrate"):
         if device is not None:
-            from posefix.spacetime.integration_opencl import rk45_opencl
-            X1, samples, steps, rejected = rk45_opencl(device, field, tau, X0, times, args.rtol, args.atol_rel * d,
-                                                       args.h0, vec=args.vec or None)
+            from posefix.spacetime.integration_opencl import OpenCLIntegrator
+            X1, samples, steps, rejected = OpenCLIntegrator(device, args.vec or None).integrate(
+                field, tau, X0, times, args.rtol, args.atol_rel * d, args.h0)
         else:
             X1, samples, steps, rejected = rk45(field_velocity(field, tau), X0, atol=args.atol_rel * d,
                                                 rtol=args.rtol, h0=args.h0, sample_times=times)

@@ -66,8 +66,9 @@ def main(args, log):
     R = camera(V_ref)
     made = {}
     with timings.step("figures"):
-        made["renders"] = figures.renders(V_tgt, ve["repaired"], F, R, target_faces, repaired_faces, reference_faces,
-                                          title=args.pose, baselines=baselines, distorted=distorted)
+        poses = {"target": (V_tgt, target_faces), "space-time" if baselines else "repaired": (ve["repaired"],
+                                                                                             repaired_faces)}
+        made["renders"] = figures.renders(F, R, poses | baselines, reference_faces, args.pose, distorted)
         made["deviation"] = figures.deviation_map(ve["repaired"], F, R, ve["deviation"], ve["replaced"],
                                                   title=args.pose)
         made["classification"] = figures.classification(

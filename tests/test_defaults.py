@@ -37,7 +37,7 @@ from posefix.volumetric.tet_mesh import tet_mesh
 from posefix.spacetime.constraints import knot_tangents, spacetime_constraints
 from posefix.spacetime.fit import FitSettings
 from posefix.spacetime.integration import rk45
-from posefix.spacetime.integration_opencl import rk45_opencl
+from posefix.spacetime.integration_opencl import OpenCLIntegrator, rk45_opencl
 from posefix.spacetime.keyframes import keyframes, prepare
 
 CONFIG = yaml.safe_load((ROOT / "config.yaml").read_text())
@@ -71,8 +71,9 @@ LIBRARY = {
     ("fit", "update"): [(FitSettings, "update", None)],
     ("fit", "memory_gb"): [(FitSettings, "memory_bytes", lambda b: b / 1e9)],
     ("integrate", "rtol"): [(rk45, "rtol", None)],
-    ("integrate", "h0"): [(rk45, "h0", None), (rk45_opencl, "h0", None)],
-    ("integrate", "vec"): [(rk45_opencl, "vec", lambda v: v or 0)],  # None and 0: the device's width
+    ("integrate", "h0"): [(rk45, "h0", None), (rk45_opencl, "h0", None),
+                          (OpenCLIntegrator.integrate, "h0", None)],
+    ("integrate", "vec"): [(OpenCLIntegrator, "vec", lambda v: v or 0)],  # None and 0: the device's width
     **{("verify", f.name): [(RepairSettings, f.name, None)] for f in dataclasses.fields(RepairSettings)},
     **{("verify", f.name): [(FinishSettings, f.name, None)] for f in dataclasses.fields(FinishSettings)},
     **{("contact", f.name): [(ContactSettings, f.name, None)] for f in dataclasses.fields(ContactSettings)},
@@ -99,7 +100,7 @@ LIBRARY = {
                                       (candidate_balls, "neighbours", None)],
     ("skeletal_pose", "max_iters"): [(SkeletalPoser.author, "max_iters", None), (MedialBallFlow.run, "max_iters", None),
                                      (medial_ball_flow, "max_iters", None)],
-    **{("repair_medial", key): [(MedialRepair, key, None), (medial_repair, key, None)]
+    **{("repair_medial", key): [(MedialRepair, key, None)]  # medial_repair passes them on
        for key in ("tau", "neighbours", "max_reach")},
     ("repair_medial", "max_iters"): [(MedialRepair.repair, "max_iters", None), (medial_repair, "max_iters", None)],
     ("volumetric_pose", "tet_vertices"): [(tet_mesh, "surface_vertices", None)],
@@ -118,7 +119,7 @@ RELATIVE = {
     ("classify", "contact_radius"): [(contact_vertices, "radius")],
     ("constraints", "tau"): [(spacetime_constraints, "tau")],
     ("fit", "eps_rel"): [(FitSettings, "eps")],
-    ("integrate", "atol_rel"): [(rk45, "atol"), (rk45_opencl, "atol")],
+    ("integrate", "atol_rel"): [(rk45, "atol"), (rk45_opencl, "atol"), (OpenCLIntegrator.integrate, "atol")],
     ("skeletal_pose", "margin"): [(MedialBallFlow, "margin"), (medial_ball_flow, "margin"),
                                   (SkeletalPoser.author, "margin")],
     ("repair_medial", "margin"): [(MedialRepair, "margin"), (medial_repair, "margin")],

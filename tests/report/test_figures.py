@@ -16,7 +16,7 @@ def test_pose_figures_are_non_blank():
     history = {"centers": np.array([128, 256, 384]), "max_error": np.array([1e-2, 5e-3, 1e-3]),
                "rms_error": np.array([1e-3, 5e-4, 1e-4]), "condition": np.array([1e3, 1e5, 1e6]),
                "seconds_evaluate": np.ones(3), "seconds_select": np.ones(3), "seconds_update": np.ones(3)}
-    made = [figures.renders(V, X, F, R, faces, faces, ~faces),
+    made = [figures.renders(F, R, {"target": (V, faces), "repaired": (X, faces)}, ~faces),
             figures.deviation_map(X, F, R, np.linalg.norm(X - V, axis=1), np.zeros(len(V), np.uint8)),
             figures.classification(V, F, R, V[:, 0] > 0, [0, 5, 10], 3, 0),
             figures.fit_history(history, 2.0, 1e-4),
@@ -40,11 +40,12 @@ def test_renders_show_a_panel_per_baseline_on_one_scale():
     R = camera(V)
     faces, none = np.zeros(len(F), bool), np.zeros(len(F), bool)
     faces[:10] = True
-    two = figures.renders(V, V * 1.01, F, R, faces, none, none)
-    three = figures.renders(V, V * 1.01, F, R, faces, none, none, baselines={"medial": (V * 1.5, faces)})
+    two = figures.renders(F, R, {"target": (V, faces), "repaired": (V * 1.01, none)}, none)
+    three = figures.renders(F, R, {"target": (V, faces), "space-time": (V * 1.01, none), "medial": (V * 1.5, faces)},
+                            none)
     assert len(two.axes) == 2 and len(three.axes) == 3
     assert [ax.get_title() for ax in three.axes] == ["target: 10 intersecting faces, 10 not in the reference",
-                                                     "S0: 0 intersecting faces, 0 new",
+                                                     "space-time: 0 intersecting faces, 0 new",
                                                      "medial: 10 intersecting faces, 10 new"]
     assert two.axes[1].get_title().startswith("repaired: ")
     assert three.get_figwidth() == 1.5 * two.get_figwidth()
@@ -69,10 +70,11 @@ def test_renders_draw_distorted_faces_in_their_own_colour():
     none = np.zeros(len(F), dtype=bool)
     bad = none.copy()
     bad[: len(F) // 2] = True
-    plain = figures.renders(V, V, F, R, none, none, none, baselines={"contact": (V, none)})
-    marked = figures.renders(V, V, F, R, none, none, none, baselines={"contact": (V, none)}, distorted=[none, bad])
+    poses = {"target": (V, none), "space-time": (V, none), "contact": (V, none)}
+    plain = figures.renders(F, R, poses, none)
+    marked = figures.renders(F, R, poses, none, distorted=[none, bad])
     assert marked.axes[2].get_title() == f"contact: 0 intersecting faces, 0 new, {len(F) // 2} distorted"
-    assert marked.axes[1].get_title() == "S0: 0 intersecting faces, 0 new"
+    assert marked.axes[1].get_title() == "space-time: 0 intersecting faces, 0 new"
     a, b = pixels(plain)[..., :3], pixels(marked)[..., :3]
     purple = lambda p: ((p[..., 2] > p[..., 1] + 0.2) & (p[..., 0] > p[..., 1] + 0.1)).sum()  # noqa: E731
     assert a.shape == b.shape and purple(b) > 1000 > 10 * purple(a)

@@ -6,7 +6,7 @@ import pytest
 from conftest import smooth_field_problem
 from posefix.spacetime.fit import FitSettings, iterate, start_fit
 from posefix.spacetime.integration import field_velocity, rk45
-from posefix.spacetime.integration_opencl import KERNEL, FieldEvaluator, rk45_opencl, select_device
+from posefix.spacetime.integration_opencl import KERNEL, FieldEvaluator, OpenCLIntegrator, rk45_opencl, select_device
 from posefix.spacetime.rbf import kernel_matrix, poly_basis
 
 
@@ -39,7 +39,7 @@ def test_opencl_and_numpy_agree_on_an_rbf_field():
     assert np.abs(a[1] - b[1]).max() <= 1e-8 * d
     # with the default tolerances both take the same steps on this field
     a = rk45(field_velocity(field, 1.0), X0, rtol=1e-9, atol=1e-7, sample_times=times)
-    b = rk45_opencl(device, field, 1.0, X0, times, 1e-9, 1e-7, vec=4)
+    b = OpenCLIntegrator(device, vec=4).integrate(field, 1.0, X0, times, 1e-9, 1e-7)
     assert np.abs(a[0] - b[0]).max() <= 1e-8 * d
 
 

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from posefix.mesh.rotations import rotation_exp
-from posefix.volumetric.editor import VolumetricEditor, averaged_rotations, edit
+from posefix.volumetric.editor import PointHandles, VolumetricEditor, averaged_rotations, edit
 from posefix.volumetric.shapes import tet_cylinder, tet_grid
 
 EDGES = np.array([[0, 1], [0, 2], [0, 3], [1, 2], [1, 3], [2, 3]])
@@ -153,7 +153,7 @@ def test_point_handles_inside_the_mesh_reach_their_targets_exactly(bar):
     from posefix.volumetric.embedding import barycentric_embedding, embedded_points
     X, T, fixed, _ = bar
     points = np.array([[9.8, 0.5, 0.5], [9.8, 0.1, 0.5], [9.8, 0.5, 0.9], [8.3, 0.37, 0.61]])
-    editor = VolumetricEditor(X, T, fixed, points=points)
+    editor = VolumetricEditor(X, T, fixed, points=PointHandles(points))
     assert np.abs(editor.solve(X[fixed], 2, point_targets=points).X - X).max() <= 1e-10  # rest
     turn = rotation_exp(np.array([[0.0, 0.0, np.pi / 2]]))[0]
     targets = np.array([6.4, 6.4, 0.0]) + (points - [10.0, 0.5, 0.5]) @ turn.T

@@ -38,14 +38,15 @@ def handle_vertices(V, count=3):
     return np.array(chosen, dtype=np.int64)
 
 
-def deform_towards(V_ref, F, V_example, alpha, k_bend, k_stretch=1.0, handles=None, settings=None, hinges=None):
+def deform_towards(V_ref, F, V_example, alpha, k_bend, k_stretch=1.0, settings=None, hinges=None):
     """Example-driven deformation of ``V_ref`` (n, 3) float towards ``alpha`` of ``V_example`` (n, 3).
 
-    Starts from the reference with the ``handles`` (default: three far-apart vertices,
-    :func:`handle_vertices`) pinned at their linear blend ``(1 - alpha) V_ref + alpha V_example``
-    and runs :func:`gauss_newton` on :func:`shell_energy`. Returns its :class:`SolveResult`.
+    Starts from the reference with three far-apart vertices (:func:`handle_vertices`) pinned at their linear
+    blend ``(1 - alpha) V_ref + alpha V_example`` and runs :func:`gauss_newton` on :func:`shell_energy`
+    (``hinges``: :func:`posefix.check.shells.mesh_hinges` of ``F``, when already built). Returns its
+    :class:`SolveResult`.
     """
-    h = handle_vertices(V_ref) if handles is None else np.asarray(handles)
+    h = handle_vertices(V_ref)
     energy = shell_energy(V_ref, F, V_example, alpha, k_bend, k_stretch, hinges)
     pinned = (1.0 - alpha) * V_ref[h] + alpha * V_example[h]
     return gauss_newton(energy, V_ref, h, pinned, F, settings)
@@ -123,7 +124,7 @@ def downstream_check(V_ref, F, examples, alphas=(0.5, 1.0), k_bend=(1e-3, 1e-2, 
     """
     hinges, handles, names = mesh_hinges(F), handle_vertices(V_ref), tuple(examples)
     grid = list(itertools.product(alphas, k_bend, range(len(names))))
-    jobs = [(V_ref, F, examples[names[example]], alpha, kb, k_stretch, handles, settings, hinges)
+    jobs = [(V_ref, F, examples[names[example]], alpha, kb, k_stretch, settings, hinges)
             for alpha, kb, example in grid]
     runs = []
     for i, ((alpha, kb, example), res) in enumerate(zip(grid, _starmap(deform_towards, jobs, workers)), 1):

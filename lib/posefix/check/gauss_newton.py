@@ -44,7 +44,14 @@ class SolveResult:
 
 @dataclass
 class SolverSettings:
-    """Stopping rules of :func:`gauss_newton` (see there); dimensionless."""
+    """Stopping rules of :func:`gauss_newton`; dimensionless.
+
+    It stops when the energy is zero, when the relative decrease falls below ``rel_tol``, when no step lowers
+    it, after ``stall_iters`` creeping steps in a row, or after ``max_iters``. "Converged" means it: the energy
+    is zero (``energy_tol``), or the last step was a full one and |J^T r| dropped by ``gradient_drop`` from the
+    start. Anything else is not converged, with the reason (:data:`STOP_REASONS`): "collapsed triangle" when a
+    face ended below ``collapse`` of its rest area, otherwise "line-search failure", "max_iters" or "stall".
+    """
     max_iters: int = 200        # Gauss-Newton iterations at most
     rel_tol: float = 1e-6       # stop when (E_prev - E) / E_prev falls below this
     energy_tol: float = 1e-16   # E at or below this is zero: converged
@@ -58,16 +65,8 @@ class SolverSettings:
 def gauss_newton(energy, V0, handles, handle_positions, F, settings=None):
     """Minimize a :class:`ShellEnergy` by Gauss–Newton with step halving, handles fixed.
 
-    Each iteration solves J^T J d = -J^T r over the free coordinates (sparse LU in a fill-reducing
-    order computed once, :func:`unknowns`), then tries steps 1, 1/2, 1/4, ... and
-    accepts the first that lowers the energy. It stops when the energy is zero, when the
-    relative decrease falls below ``rel_tol``, when no step lowers it, after ``stall_iters``
-    creeping steps in a row, or after ``max_iters``.
-
-    "Converged" means it: the energy is zero (``energy_tol``), or the last step was a full one and
-    |J^T r| dropped by ``gradient_drop`` from the start. Anything else is not converged, with the
-    reason: "collapsed triangle" when a face ended below ``collapse`` of its rest area (the bending
-    gradient grows like 1 / area), otherwise "line-search failure", "max_iters" or "stall".
+    Each iteration solves J^T J d = -J^T r over the free coordinates (sparse LU, :func:`unknowns`) and takes the
+    first of the steps 1, 1/2, ... that lowers the energy; when it stops and why: :class:`SolverSettings`.
 
     Parameters
     ----------
@@ -80,67 +79,74 @@ def gauss_newton(energy, V0, handles, handle_positions, F, settings=None):
     F : (m, 3) int
         Faces (for the collapse check).
     settings : SolverSettings, optional
-        Default: :class:`SolverSettings` (one log line per iteration at debug level).
 
     Returns
     -------
     SolveResult
     """
-    s = settings or SolverSettings()
-    start = time.perf_counter()
+    s, start = settings or SolverSettings(), time.perf_counter()
     V = np.array(V0, dtype=float)
     V[handles] = handle_positions
     free = unknowns(energy.jacobian(V), handles)
-    rest_area = face_areas(np.asarray(V0, dtype=float), F)
     r = energy.residuals(V)
-    errors, steps = [float(r @ r)], []
-    g0 = g = None
-    reason, creeping = "max_iters", 0
-    for _ in range(s.max_iters + 1):
+    errors, steps, creeping, g0 = [float(r @ r)], [], 0, None  # one log line per iteration at debug level
+    while True:
         J = energy.jacobian(V)[:, free]
         g = J.T @ r
-        if g0 is None:
-            g0 = g
-        if errors[-1] <= s.energy_tol:
-            reason = "converged"
-            break
-        if len(steps) == s.max_iters:
-            break
-        if not np.all(np.isfinite(J.data)):
-            reason = "collapsed triangle"
-            break
-        delta = _step(J, g)
-        if delta is None:
-            reason = "line-search failure"
-            break
-        step, accepted = 1.0, None
-        while step >= s.min_step:
-            X = V.copy()
-            X.reshape(-1)[free] += step * delta
-            rx = energy.residuals(X)
-            ex = float(rx @ rx)
-            if ex < errors[-1]:
-                accepted = (X, rx, ex)
-                break
-            step *= 0.5
+        g0 = g if g0 is None else g0
+        reason = _stop_reason(J, errors[-1], len(steps), s)
+        accepted = None if reason else _line_search(energy, V, free, _step(J, g), errors[-1], s.min_step)
         if accepted is None:
-            reason = "line-search failure"
+            reason = reason or "line-search failure"
             break
-        V, r, ex = accepted
-        decrease = (errors[-1] - ex) / errors[-1]
-        errors.append(ex)
+        V, r, step = accepted
+        errors.append(float(r @ r))
         steps.append(step)
-        log.debug("GN %3d: E %.6e step %.3g", len(steps), ex, step)
+        log.debug("GN %3d: E %.6e step %.3g", len(steps), errors[-1], step)
         creeping = creeping + 1 if step < s.stall_step else 0
         if creeping >= s.stall_iters:
             reason = "stall"
             break
-        if decrease < s.rel_tol and ex > s.energy_tol:
-            J = energy.jacobian(V)[:, free]
-            g = J.T @ r
-            reason = "stall"
+        if (errors[-2] - errors[-1]) / errors[-2] < s.rel_tol and errors[-1] > s.energy_tol:
+            g, reason = energy.jacobian(V)[:, free].T @ r, "stall"
             break
     reduction = float(np.linalg.norm(g0) / max(np.linalg.norm(g), 1e-300))
+    return _result(V, (errors, steps), reason, reduction, face_areas(np.asarray(V0, dtype=float), F), F, s, start)
+
+
+def _stop_reason(J, energy, iterations, s):
+    """Why to stop before the next step (a reason of :data:`STOP_REASONS`), or None: the energy is zero, the
+    iterations ran out, or the Jacobian ``J`` is not finite (a face collapsed to zero area)."""
+    if energy <= s.energy_tol:
+        return "converged"
+    if iterations == s.max_iters:
+        return "max_iters"
+    if not np.all(np.isfinite(J.data)):
+        return "collapsed triangle"
+    return None
+
+
+def _line_search(energy, V, free, delta, e0, min_step):
+    """``(X (n, 3), residuals, step)``: the first of the steps 1, 1/2, ... down to ``min_step`` along ``delta`` (over
+    the ``free`` coordinates) whose energy is below ``e0``; None when none is (or ``delta`` is None)."""
+    step = 1.0
+    while delta is not None and step >= min_step:
+        X = V.copy()
+        X.reshape(-1)[free] += step * delta
+        rx = energy.residuals(X)
+        if float(rx @ rx) < e0:
+            return X, rx, step
+        step *= 0.5
+    return None
+
+
+def _result(V, history, reason, reduction, rest_area, F, s, start):
+    """The :class:`SolveResult` of a run that stopped at ``V`` for ``reason``; ``history``: (energies, steps).
+
+    "Converged" also when the last step was a full one and |J^T r| dropped by ``gradient_drop`` (``reduction``);
+    a run that is not converged and has a face below ``collapse`` of its rest area (``rest_area`` (m,)) stopped
+    because of it: "collapsed triangle" (the bending gradient grows like 1 / area)."""
+    errors, steps = history
     if reason != "converged" and steps and steps[-1] == 1.0 and reduction >= s.gradient_drop:
         reason = "converged"
     ratio = float(np.min(face_areas(V, F) / np.maximum(rest_area, 1e-300)))

@@ -120,21 +120,8 @@ def contact_vertices(frames, F, V_ref, distance, radius):
     face_order = np.argsort(face_patch, kind="stable")
     face_start = np.searchsorted(face_patch[face_order], np.arange(k + 1))
     face_status = status[:, patch[F]].min(axis=2)  # (k, m): the nearest of a face's vertex patches
-    with_faces = np.flatnonzero(face_start[1:] > face_start[:-1])
-    candidates = []
-    for f_idx, V in enumerate(frames):
-        T = V[F]
-        v_lo, v_hi = _group_boxes(V[vert_order], V[vert_order], vert_start)
-        f_lo, f_hi = _group_boxes(T.min(axis=1)[face_order], T.max(axis=1)[face_order], face_start)
-        pairs = cross_overlapping_pairs(build_box_tree(v_lo - distance, v_hi + distance),
-                                        build_box_tree(f_lo[with_faces], f_hi[with_faces]))
-        a, b = pairs[:, 0], with_faces[pairs[:, 1]]
-        mixed = status[a, b] != NEAR
-        vv, ff = _expand(a[mixed], b[mixed], vert_order, vert_start, face_order, face_start)
-        keep = face_status[patch[vv], ff] != NEAR
-        vv, ff = vv[keep], ff[keep]
-        hit = point_triangle_distance(V[vv], T[ff, 0], T[ff, 1], T[ff, 2]) < distance
-        candidates.append(np.stack([np.full(hit.sum(), f_idx), vv[hit], ff[hit]], 1))
+    groups, patches = (vert_order, vert_start, face_order, face_start), (patch, status, face_status)
+    candidates = [_close_pairs(V, F, distance, groups, patches, f_idx) for f_idx, V in enumerate(frames)]
     cand = np.concatenate(candidates) if candidates else np.zeros((0, 3), dtype=np.int64)
     far = face_status[patch[cand[:, 1]], cand[:, 2]] == FAR
     unsure = np.flatnonzero(~far)
@@ -149,6 +136,27 @@ def contact_vertices(frames, F, V_ref, distance, radius):
     log.info("contacts per frame (%d patches, %d pairs checked exactly): %s vertices", k, len(unsure),
              ", ".join(str(c) for c in out.sum(axis=1)))
     return out
+
+
+def _close_pairs(V, F, distance, groups, patches, frame):
+    """(p, 3) int64 rows (``frame``, vertex, face): the vertices of ``V`` (n, 3) closer than ``distance`` to a face
+    of another patch that is not NEAR theirs. ``groups``: (vertex order, vertex starts, face order, face starts)
+    of the patches; ``patches``: (patch of each vertex (n,), patch status (k, k), face status (k, m))."""
+    vert_order, vert_start, face_order, face_start = groups
+    patch, status, face_status = patches
+    with_faces = np.flatnonzero(face_start[1:] > face_start[:-1])
+    T = V[F]
+    v_lo, v_hi = _group_boxes(V[vert_order], V[vert_order], vert_start)
+    f_lo, f_hi = _group_boxes(T.min(axis=1)[face_order], T.max(axis=1)[face_order], face_start)
+    pairs = cross_overlapping_pairs(build_box_tree(v_lo - distance, v_hi + distance),
+                                    build_box_tree(f_lo[with_faces], f_hi[with_faces]))
+    a, b = pairs[:, 0], with_faces[pairs[:, 1]]
+    mixed = status[a, b] != NEAR
+    vv, ff = _expand(a[mixed], b[mixed], vert_order, vert_start, face_order, face_start)
+    keep = face_status[patch[vv], ff] != NEAR
+    vv, ff = vv[keep], ff[keep]
+    hit = point_triangle_distance(V[vv], T[ff, 0], T[ff, 1], T[ff, 2]) < distance
+    return np.stack([np.full(hit.sum(), frame), vv[hit], ff[hit]], 1)
 
 
 def _expand(a, b, vert_order, vert_start, face_order, face_start):

@@ -157,22 +157,29 @@ def fast_winding_numbers(V, F, P, beta=2.0, leaf_size=128):
     centroid = V[F].mean(axis=1)
     area = 0.5 * np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])  # area-weighted normals
     clusters = _clusters(centroid, leaf_size)
-    exact = 0
-    for faces in clusters:
-        centre = centroid[faces].mean(axis=0)
-        radius = np.linalg.norm(V[F[faces]] - centre, axis=2).max()
-        d = centre - Q
-        r = np.sqrt(_dot(d, d))
-        near = r <= beta * radius
-        out[~near] += _far_field(area[faces], centroid[faces] - centre, d[~near], r[~near])
-        idx = np.flatnonzero(near)
-        if len(idx):
-            out[idx] += 2.0 * _half_angle_sums(_face_terms(V, F[faces]), Q[idx])
-            exact += len(idx) * len(faces)
+    exact = sum(_add_cluster(out, (V, F), faces, Q, (centroid, area), beta) for faces in clusters)
     out /= 4.0 * np.pi
     log.debug("fast winding numbers of %d points, %d faces, %d clusters: %.1f%% pairs exact, %.2f s", len(P),
               len(F), len(clusters), 100.0 * exact / (len(P) * len(F)), time.perf_counter() - start)
     return out
+
+
+def _add_cluster(out, mesh, faces, Q, face_data, beta):
+    """Add the solid angles (times 4 pi) of the cluster ``faces`` (c,) of ``mesh = (V, F)`` at the points ``Q``
+    (k, 3) to ``out`` (k,): exactly where nearer than ``beta`` times its radius, else its far field.
+    ``face_data``: (centroids (m, 3), area-weighted normals (m, 3)). Returns the point-face pairs summed
+    exactly."""
+    (V, F), (centroid, area) = mesh, face_data
+    centre = centroid[faces].mean(axis=0)
+    radius = np.linalg.norm(V[F[faces]] - centre, axis=2).max()
+    d = centre - Q
+    r = np.sqrt(_dot(d, d))
+    near = r <= beta * radius
+    out[~near] += _far_field(area[faces], centroid[faces] - centre, d[~near], r[~near])
+    idx = np.flatnonzero(near)
+    if len(idx):
+        out[idx] += 2.0 * _half_angle_sums(_face_terms(V, F[faces]), Q[idx])
+    return len(idx) * len(faces)
 
 
 def _clusters(X, leaf_size):

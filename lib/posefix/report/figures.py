@@ -35,25 +35,23 @@ def panel_height(limits, width=4.6, extra=1.8):
     return float(np.clip(width * aspect + extra, 3.0, 9.0))
 
 
-def renders(V_tgt, X, F, R, target_faces, repaired_faces, reference_faces, title="", baselines=None,
-            distorted=None):
-    """Target and repaired pose side by side, intersecting faces highlighted (S0 Fig. 6 style).
+def renders(F, R, poses, reference_faces, title="", distorted=None):
+    """A target and its repairs side by side, intersecting faces highlighted (S0 Fig. 6 style).
 
     Parameters
     ----------
-    V_tgt, X : (n, 3) float
-        Target and repaired positions.
     F : (m, 3) int
     R : (3, 3) float
         Camera (:func:`posefix.report.rasterizer.camera`).
-    target_faces, repaired_faces, reference_faces : (m,) bool
-        Faces intersecting in the target, the repaired pose and the reference.
-    baselines : dict of str -> ((n, 3) float, (m,) bool), optional
-        Positions and intersecting faces of baseline repairs, one more panel each (the repaired pose
-        is then titled S0).
+    poses : dict of str -> ((n, 3) float, (m,) bool)
+        Panel title -> positions and intersecting faces: the target first, then the repaired poses, one panel
+        each, on one scale.
+    reference_faces : (m,) bool
+        Faces intersecting in the reference.
+    title : str
     distorted : list of (m,) bool, optional
-        Distorted faces of each repaired pose (S0's, then the baselines' in order): drawn in purple, counted
-        in the titles (:func:`posefix.mesh.distortion.distorted_faces`).
+        Distorted faces of each repaired pose, in order: drawn in purple, counted in the titles
+        (:func:`posefix.mesh.distortion.distorted_faces`).
 
     Returns
     -------
@@ -61,8 +59,7 @@ def renders(V_tgt, X, F, R, target_faces, repaired_faces, reference_faces, title
         Red: intersecting faces the reference does not have (in the repaired poses: new ones);
         orange: intersecting faces the reference has too; purple: distorted faces.
     """
-    panels = [("target", V_tgt, target_faces), ("S0" if baselines else "repaired", X, repaired_faces)]
-    panels += [(name, V, faces) for name, (V, faces) in (baselines or {}).items()]
+    panels = [(name, V, faces) for name, (V, faces) in poses.items()]
     over = [np.zeros(len(F), dtype=bool)] + list(distorted or [np.zeros(len(F), dtype=bool)] * (len(panels) - 1))
     limits = view_limits(*(V for _, V, _ in panels), R=R)
     fig = Figure(figsize=(5 * len(panels), panel_height(limits)), dpi=DPI)

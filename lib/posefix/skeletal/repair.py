@@ -214,6 +214,7 @@ class MedialRepair:
                                   time.perf_counter() - start)
 
 
-def medial_repair(V, F, S, X, margin, tau=0.5, neighbours=64, max_reach=4, max_iters=50):
-    """One-off :meth:`MedialRepair.repair` of the target ``X``; returns a :class:`MedialRepairResult`."""
-    return MedialRepair(V, F, S, margin, tau, neighbours, max_reach).repair(X, max_iters)
+def medial_repair(V, F, S, X, margin, max_iters=50, **options):
+    """One-off :meth:`MedialRepair.repair` of the target ``X`` (``options``: :class:`MedialRepair`'s ``tau``,
+    ``neighbours``, ``max_reach``, ``min_area``); returns a :class:`MedialRepairResult`."""
+    return MedialRepair(V, F, S, margin, **options).repair(X, max_iters)

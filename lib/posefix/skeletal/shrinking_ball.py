@@ -42,23 +42,17 @@ def shrinking_ball_centers(V, N, r_init, preserve_angle=np.radians(20.0), planar
 
     Returns
     -------
-    S : (n, 3) float
-        Ball centres ``V - R N``.
-    R : (n,) float
-        Radii, at most ``r_init``.
+    S (n, 3) float, R (n,) float
+        Ball centres ``V - R N`` and radii, at most ``r_init``.
     converged : (n,) bool
         The ball converged (or stopped by the noise rule) to a radius below ``r_init``; False for
         capped ("infinite") balls, balls stopped by ``max_iter`` and points with a zero normal.
     """
     start = time.perf_counter()
-    V = np.asarray(V, dtype=np.float64)
-    N = np.asarray(N, dtype=np.float64)
+    V, N = np.asarray(V, dtype=np.float64), np.asarray(N, dtype=np.float64)
     delta = 1e-6 * r_init if delta is None else delta
-    tree = cKDTree(V)
-    n = len(V)
-    R = np.full(n, float(r_init))
-    r_prev = np.zeros(n)
-    converged = np.zeros(n, dtype=bool)
+    tree, n = cKDTree(V), len(V)
+    R, r_prev, converged = np.full(n, float(r_init)), np.zeros(n), np.zeros(n, dtype=bool)
     active = np.flatnonzero(np.linalg.norm(N, axis=1) > 0)
     for step in range(max_iter + 1):
         if len(active) == 0:

@@ -24,8 +24,11 @@ _B5 = np.array([35 / 384, 0.0, 500 / 1113, 125 / 192, -2187 / 6784, 11 / 84, 0.0
 _B4 = np.array([5179 / 57600, 0.0, 7571 / 16695, 393 / 640, -92097 / 339200, 187 / 2100, 1 / 40])
 _E = _B5 - _B4
 
+MAX_STEPS = 10000
+"""Attempted steps per point at most (:func:`rk45` and the OpenCL kernel)."""
 
-def rk45(velocity, X0, *, atol, rtol=1e-9, h0=0.05, max_steps=10000, sample_times=(0.0, 1.0)):
+
+def rk45(velocity, X0, *, atol, rtol=1e-9, h0=0.05, sample_times=(0.0, 1.0)):
     """Integrate ``dx/dt = velocity(x, t)`` for many points from ``t = 0`` to ``t = 1``.
 
     Parameters
@@ -35,68 +38,65 @@ def rk45(velocity, X0, *, atol, rtol=1e-9, h0=0.05, max_steps=10000, sample_time
     X0 : (n, 3) float
         Start positions.
     atol, rtol : float
-        Absolute (length units; the pipeline's is ``integrate.atol_rel`` times the bbox diagonal)
-        and relative error tolerances per step.
+        Absolute (length units; the pipeline's: ``integrate.atol_rel`` d) and relative error tolerances per step.
     h0 : float
         First step size (time units).
-    max_steps : int
-        Cap on the attempted steps per point.
     sample_times : sequence of float
-        Increasing times in [0, 1] at which positions are recorded; steps are shortened to land
-        on them exactly.
+        Increasing times in [0, 1] at which positions are recorded (steps are shortened to land on them).
 
     Returns
     -------
-    X1 : (n, 3) float
-        Positions at ``t = 1``.
-    samples : (S, n, 3) float
-        Positions at the sample times.
-    steps : (n,) int
-        Accepted steps per point.
-    rejected : (n,) int
-        Rejected steps per point.
+    X1 (n, 3) float, samples (S, n, 3) float, steps (n,) int, rejected (n,) int
+        Positions at ``t = 1`` and at the sample times; accepted and rejected steps per point.
     """
     X = np.array(X0, dtype=np.float64)
-    n = len(X)
-    times = np.asarray(sample_times, dtype=np.float64)
-    samples = np.empty((len(times), n, 3))
-    t = np.zeros(n)
-    h = np.full(n, float(h0))
-    steps = np.zeros(n, dtype=np.int64)
-    rejected = np.zeros(n, dtype=np.int64)
-    nxt = np.zeros(n, dtype=np.int64)
+    n, times = len(X), np.asarray(sample_times, dtype=np.float64)
+    samples, t, h = np.empty((len(times), n, 3)), np.zeros(n), np.full(n, float(h0))
+    steps, rejected, nxt = (np.zeros(n, dtype=np.int64) for _ in range(3))
     while (nxt < len(times)).any() and times[min(nxt.min(), len(times) - 1)] <= 0.0:
-        hit = (nxt < len(times)) & (times[np.minimum(nxt, len(times) - 1)] <= 0.0)
-        samples[nxt[hit], np.flatnonzero(hit)] = X[hit]
-        nxt[hit] += 1
+        _land(np.flatnonzero((nxt < len(times)) & (times[np.minimum(nxt, len(times) - 1)] <= 0.0)), X, t, times,
+              (samples, nxt))
     k1 = velocity(X, t)
     active = np.arange(n)
     while len(active):
         x, tt = X[active], t[active]
         target = np.where(nxt[active] < len(times), times[np.minimum(nxt[active], len(times) - 1)], 1.0)
         hh = np.minimum(h[active], np.minimum(1.0, target) - tt)
-        K = [k1[active]]
-        for s in range(1, 7):
-            xs = x + hh[:, None] * sum(a * K[j] for j, a in enumerate(_A[s]) if a != 0.0)
-            K.append(velocity(xs, tt + _C[s] * hh))
-        x5 = x + hh[:, None] * sum(b * K[j] for j, b in enumerate(_B5) if b != 0.0)
-        err_vec = hh[:, None] * sum(e * K[j] for j, e in enumerate(_E) if e != 0.0)
+        x5, err_vec, k7 = _dormand_prince_step(velocity, x, tt, hh, k1[active])
         scale = atol + rtol * np.maximum(np.abs(x), np.abs(x5))
         err = np.max(np.abs(err_vec) / scale, axis=1)
         ok = err <= 1.0
         acc = active[ok]
-        X[acc], t[acc], k1[acc] = x5[ok], tt[ok] + hh[ok], K[6][ok]   # FSAL: k7 is the next k1
+        X[acc], t[acc], k1[acc] = x5[ok], tt[ok] + hh[ok], k7[ok]   # FSAL: k7 is the next k1
         steps[acc] += 1
         rejected[active[~ok]] += 1
-        landed = acc[(nxt[acc] < len(times)) & (t[acc] >= target[ok] - 1e-12)]
-        t[landed] = times[nxt[landed]]
-        samples[nxt[landed], landed] = X[landed]
-        nxt[landed] += 1
+        _land(acc[(nxt[acc] < len(times)) & (t[acc] >= target[ok] - 1e-12)], X, t, times, (samples, nxt))
         factor = np.clip(0.9 * np.maximum(err, 1e-10) ** -0.2, 0.2, 5.0)
         h[active] = hh * np.where(ok, factor, np.minimum(factor, 1.0))
-        done = (t >= 1.0 - 1e-12) | (steps + rejected >= max_steps)
+        done = (t >= 1.0 - 1e-12) | (steps + rejected >= MAX_STEPS)
         active = np.flatnonzero(~done)
     return X, samples, steps, rejected
+
+
+def _land(points, X, t, times, record):
+    """Record the ``points`` (k,) at their next sample time: their times ``t`` (n,) set to it, their positions
+    ``X`` (n, 3) into ``record = (samples (S, n, 3), next sample (n,))``, and their next sample advanced."""
+    samples, nxt = record
+    t[points] = times[nxt[points]]
+    samples[nxt[points], points] = X[points]
+    nxt[points] += 1
+
+
+def _dormand_prince_step(velocity, x, t, h, k1):
+    """One Dormand–Prince 5(4) step of every point: ``(x5 (k, 3), error estimate (k, 3), k7 (k, 3))`` from positions
+    ``x`` (k, 3) at times ``t`` (k,) with steps ``h`` (k,) and the field ``k1`` (k, 3) there (k7: the field at
+    ``x5``, the next step's k1)."""
+    K = [k1]
+    for s in range(1, 7):
+        xs = x + h[:, None] * sum(a * K[j] for j, a in enumerate(_A[s]) if a != 0.0)
+        K.append(velocity(xs, t + _C[s] * h))
+    x5 = x + h[:, None] * sum(b * K[j] for j, b in enumerate(_B5) if b != 0.0)
+    return x5, h[:, None] * sum(e * K[j] for j, e in enumerate(_E) if e != 0.0), K[6]
 
 
 def field_velocity(field, tau, chunk=2048):

@@ -18,6 +18,8 @@ platform has one, else a CPU device.
 
 import numpy as np
 
+from posefix.spacetime.integration import MAX_STEPS
+
 KERNEL = r"""
 #pragma OPENCL EXTENSION cl_khr_fp64 : enable
 
@@ -225,52 +227,61 @@ def _double4(values):
     return out[0]
 
 
-def rk45_opencl(device, field, tau, X0, sample_times, rtol, atol, h0=0.05, max_steps=10000, vec=None, group=None):
-    """Integrate every point of ``X0`` through ``field`` on an OpenCL device.
+class OpenCLIntegrator:
+    """The RK45 kernel built for one OpenCL device; :meth:`integrate` per field.
 
     Parameters
     ----------
     device : pyopencl.Device
-    field : posefix.spacetime.rbf.RBFField
-    tau : float
-        Time-axis scale (length units) of the field's space-time coordinates.
-    X0 : (n, 3) float
-    sample_times : (S,) float
-        Increasing times in [0, 1] whose positions are recorded (steps land on them).
-    rtol, atol, h0, max_steps
-        As in :func:`posefix.spacetime.integration.rk45`.
     vec : int, optional
-        Centres per vector operation (default: the device's preferred double vector width x 2,
-        at least 2).
-    group : int, optional
-        Work-group size (default: chosen by the runtime).
-
-    Returns
-    -------
-    X1 : (n, 3) float
-    samples : (S, n, 3) float
-    steps, rejected : (n,) int
+        Centres per vector operation (default: the device's preferred double vector width x 2, at least 2).
     """
-    import pyopencl as cl
 
-    ctx, queue, program, vec = _program(device, vec)
-    n = len(X0)
-    soa = _centres_soa(field.normalize(field.centers), field.weights, vec)
-    mf = cl.mem_flags
-    buf = lambda a: cl.Buffer(ctx, mf.READ_ONLY | mf.COPY_HOST_PTR, hostbuf=np.ascontiguousarray(a))  # noqa: E731
-    X1 = np.empty((n, 3))
-    samples = np.empty((len(sample_times), n, 3))
-    steps = np.empty(n, dtype=np.int32)
-    rejected = np.empty(n, dtype=np.int32)
-    out = [cl.Buffer(ctx, mf.WRITE_ONLY, a.nbytes) for a in (X1, samples, steps, rejected)]
-    program.rk45(queue, (n,), (group,) if group else None, buf(np.asarray(X0, dtype=np.float64)), np.int32(n),
-                 buf(soa), np.int32(soa.shape[1]), buf(field.poly), _double4(field.shift), np.float64(field.scale),
-                 np.float64(tau), np.float64(rtol), np.float64(atol), np.float64(h0), np.int32(max_steps),
-                 buf(np.asarray(sample_times, dtype=np.float64)), np.int32(len(sample_times)), *out)
-    for host, dev in zip((X1, samples, steps, rejected), out):
-        cl.enqueue_copy(queue, host, dev)
-    queue.finish()
-    return X1, samples, steps.astype(np.int64), rejected.astype(np.int64)
+    def __init__(self, device, vec=None):
+        self.ctx, self.queue, self.program, self.vec = _program(device, vec)
+
+    def integrate(self, field, tau, X0, sample_times, rtol, atol, h0=0.05):
+        """Integrate every point of ``X0`` through ``field``, as :func:`posefix.spacetime.integration.rk45` does.
+
+        Parameters
+        ----------
+        field : posefix.spacetime.rbf.RBFField
+        tau : float
+            Time-axis scale (length units) of the field's space-time coordinates.
+        X0 : (n, 3) float
+        sample_times : (S,) float
+            Increasing times in [0, 1] whose positions are recorded (steps land on them).
+        rtol, atol, h0
+            As in :func:`posefix.spacetime.integration.rk45` (at most its ``MAX_STEPS`` steps per point).
+
+        Returns
+        -------
+        X1 (n, 3) float, samples (S, n, 3) float, steps (n,) int, rejected (n,) int
+        """
+        import pyopencl as cl
+
+        n = len(X0)
+        soa = _centres_soa(field.normalize(field.centers), field.weights, self.vec)
+        mf = cl.mem_flags
+        buf = lambda a: cl.Buffer(self.ctx, mf.READ_ONLY | mf.COPY_HOST_PTR,  # noqa: E731
+                                  hostbuf=np.ascontiguousarray(a))
+        host = (np.empty((n, 3)), np.empty((len(sample_times), n, 3)), np.empty(n, dtype=np.int32),
+                np.empty(n, dtype=np.int32))
+        out = [cl.Buffer(self.ctx, mf.WRITE_ONLY, a.nbytes) for a in host]
+        self.program.rk45(self.queue, (n,), None, buf(np.asarray(X0, dtype=np.float64)), np.int32(n), buf(soa),
+                          np.int32(soa.shape[1]), buf(field.poly), _double4(field.shift), np.float64(field.scale),
+                          np.float64(tau), np.float64(rtol), np.float64(atol), np.float64(h0), np.int32(MAX_STEPS),
+                          buf(np.asarray(sample_times, dtype=np.float64)), np.int32(len(sample_times)), *out)
+        for array, dev in zip(host, out):
+            cl.enqueue_copy(self.queue, array, dev)
+        self.queue.finish()
+        X1, samples, steps, rejected = host
+        return X1, samples, steps.astype(np.int64), rejected.astype(np.int64)
+
+
+def rk45_opencl(device, field, tau, X0, sample_times, rtol, atol, h0=0.05):
+    """:meth:`OpenCLIntegrator.integrate` on ``device`` with its default vector width (one-off)."""
+    return OpenCLIntegrator(device).integrate(field, tau, X0, sample_times, rtol, atol, h0)
 
 
 class FieldEvaluator:

@@ -12,7 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from posefix.mesh.rotations import rotation_exp
-from posefix.volumetric.editor import EditResult, VolumetricEditor
+from posefix.volumetric.editor import EditResult, PointHandles, VolumetricEditor
 from posefix.mesh.geometry import bbox_diagonal
 from posefix.volumetric.transfer import transfer_matrix
 
@@ -64,7 +64,8 @@ class VolumetricPoser:
         if len(np.unique(vertices)) < len(vertices):
             raise ValueError("handle regions share vertices")
         self.editor = VolumetricEditor(X, T, vertices, rigid=list((rigid or {}).values()), regions=self.regions,
-                                       points=np.concatenate(list(self.points.values())) if self.points else None)
+                                       points=PointHandles(np.concatenate(list(self.points.values())))
+                                       if self.points else None)
         self.transfer = transfer_matrix(X, T, V, 0.05 * bbox_diagonal(V) if radius is None else radius)
 
     def targets(self, moves, fraction=1.0):

@@ -71,6 +71,25 @@ class EditResult:
     seconds: float
 
 
+@dataclass(frozen=True)
+class PointHandles:
+    """Point handles of a :class:`VolumetricEditor` (S4 §2.3.1): fixed linear combinations of the vertices of the
+    tet that contains each point (:func:`barycentric_embedding`).
+
+    Attributes
+    ----------
+    positions : (p, 3) float
+        Rest positions, anywhere inside or near the mesh (e.g. motion-capture markers).
+    weight : float, optional
+        None: held exactly at their targets by Lagrange multipliers. Else soft: ``weight`` times the mean
+        diagonal of ``L`` weighs ``|C x - p|^2`` against the Laplacian energy; needed when the points
+        over-determine the tets (more points than a tet has degrees of freedom, e.g. a whole surface region).
+    """
+
+    positions: np.ndarray
+    weight: float | None = None
+
+
 class VolumetricEditor:
     """Deform a tet mesh by vertex handles (S4 §2.3); ``L`` is reduced and factorized once.
 
@@ -90,23 +109,16 @@ class VolumetricEditor:
     regions : sequence of (k,) int, optional
         Region handles as tet ids (S4 §2.3.1): their vertices must be among ``handles``; :meth:`solve` can
         impose their orientation, which S4's rotation interpolation then spreads over the other tets.
-    points : (p, 3) float, optional
-        Point handles anywhere inside or near the mesh (S4 §2.3.1, e.g. motion-capture markers): fixed linear
-        combinations of the vertices of the tet that contains them (:func:`barycentric_embedding`), held
-        exactly at their targets by Lagrange multipliers, or in the least-squares sense with ``point_weight``.
-    point_weight : float, optional
-        Soft point handles: ``point_weight`` times the mean diagonal of ``L`` weighs ``|C x - p|^2`` against the
-        Laplacian energy. Needed when the points over-determine the tets (more points than a tet has
-        degrees of freedom, e.g. a whole surface region); default exact (Lagrange multipliers).
-
+    points : PointHandles, optional
+        Point handles anywhere inside or near the mesh (S4 §2.3.1, e.g. motion-capture markers).
     Examples
     --------
     >>> editor = VolumetricEditor(X, T, handles=np.r_[fixed, moved])              # doctest: +SKIP
     >>> result = editor.solve(np.r_[X[fixed], X[moved] + [0, 1, 0]], iterations=10)  # doctest: +SKIP
     """
 
-    def __init__(self, X, T, handles, rigid=(), stiffness=None, rotation="polar", regions=(), points=None,
-                 point_weight=None):
+    def __init__(self, X, T, handles, rigid=(), stiffness=None, rotation="polar", regions=(), points=None):
+        points, point_weight = (None, None) if points is None else (points.positions, points.weight)
         if rotation not in ROTATIONS:
             raise ValueError(f"rotation extraction {rotation!r}: one of {ROTATIONS}")
         self.X, self.T, self.rotation = np.asarray(X, dtype=float), np.asarray(T), rotation

@@ -25,7 +25,7 @@ from posefix.mesh.geometry import bbox_diagonal
 from posefix.mesh.harmonic import harmonic_extension
 from posefix.mesh.intersections import intersecting_faces, self_intersecting_pairs
 from posefix.mesh.topology import grow_rings, vertex_adjacency
-from posefix.volumetric.editor import VolumetricEditor
+from posefix.volumetric.editor import PointHandles, VolumetricEditor
 from posefix.volumetric.transfer import transfer_matrix
 
 log = logging.getLogger(__name__)
@@ -107,8 +107,7 @@ class VolumetricFill:
         kept = ~np.asarray(free, dtype=bool)
         if not kept.any():
             raise ValueError("every vertex is free: nothing holds the tets")
-        editor = VolumetricEditor(self.X, self.T, np.zeros(0, dtype=np.int64), points=self.V[kept],
-                                  point_weight=point_weight)
+        editor = VolumetricEditor(self.X, self.T, np.zeros(0, dtype=np.int64), points=PointHandles(self.V[kept], point_weight))
         edit = editor.solve(np.zeros((0, 3)), iterations, point_targets=target[kept])
         surface = self.transfer @ edit.X
         offset = np.where(kept[:, None], target - surface, 0.0)

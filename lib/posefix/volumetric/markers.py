@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from posefix.mesh.geometry import bbox_diagonal
-from posefix.volumetric.editor import VolumetricEditor
+from posefix.volumetric.editor import PointHandles, VolumetricEditor
 from posefix.volumetric.transfer import transfer_matrix
 
 log = logging.getLogger(__name__)
@@ -73,8 +73,8 @@ class MarkerAnimator:
     def __init__(self, V, X, T, markers, rigid=(), radius=None, point_weight=None):
         markers = np.asarray(markers, dtype=float).reshape(-1, 3)
         radius = 0.05 * bbox_diagonal(V) if radius is None else radius
-        self.editor = VolumetricEditor(X, T, np.zeros(0, dtype=np.int64), rigid=rigid, points=markers,
-                                       point_weight=point_weight)
+        self.editor = VolumetricEditor(X, T, np.zeros(0, dtype=np.int64), rigid=rigid,
+                                       points=PointHandles(markers, point_weight))
         self.transfer = transfer_matrix(X, T, V, radius)
         self.marker_transfer = transfer_matrix(X, T, markers, radius)
 
