@@ -31,6 +31,10 @@ include: "rules/volumetric.smk"
 report: "rules/captions/workflow.rst"
 
 
+if workflow.is_main_process:  # the jobs of this run read the code fingerprints instead of the code
+    CODE.save()
+
+
 wildcard_constraints:
     pose="|".join(re.escape(p) for p in POSES),
 

@@ -16,9 +16,8 @@ rule skeleton:
     output:
         f"{RESULTS}/skeleton.h5",
     params:
-        options=" ".join(f"--{key.replace('_', '-')} {config['skeletal_pose'][key]}" for key in
-                         ("medial", "tol", "smooth_iters", "smooth_step")),
-        python=PYTHON,
+        options=config_flags({key: config["skeletal_pose"][key] for key in ("medial", "tol", "smooth_iters",
+                                                                             "smooth_step")}),
         script=stage_script("skeleton"),
         code=stage_code("skeleton"),
     threads: 1
@@ -26,8 +25,10 @@ rule skeleton:
         f"{RESULTS}/logs/skeleton.log",
     benchmark:
         f"{RESULTS}/benchmarks/skeleton.tsv"
+    conda:
+        "../envs/posefix.yaml"
     shell:
-        "{params.python:q} {params.script:q} --reference {input.reference:q} --out {output:q} {params.options}"
+        "python {params.script:q} --reference {input.reference:q} --out {output:q} {params.options}"
         " --threads {threads} --log {log:q}"
 
 
@@ -40,9 +41,7 @@ rule repair_medial:
     output:
         f"{RESULTS}/{{pose}}/medial.h5",
     params:
-        options=" ".join(f"--{key.replace('_', '-')} {MEDIAL[key]}" for key in
-                         ("margin", "tau", "neighbours", "max_reach", "max_iters")),
-        python=PYTHON,
+        options=config_flags(MEDIAL),
         script=stage_script("repair_medial"),
         code=stage_code("repair_medial"),
     threads: MEDIAL["threads"]
@@ -50,8 +49,10 @@ rule repair_medial:
         f"{RESULTS}/logs/{{pose}}/repair_medial.log",
     benchmark:
         f"{RESULTS}/benchmarks/{{pose}}/repair_medial.tsv"
+    conda:
+        "../envs/posefix.yaml"
     shell:
-        "{params.python:q} {params.script:q} --reference {input.reference:q} --target {input.target:q}"
+        "python {params.script:q} --reference {input.reference:q} --target {input.target:q}"
         " --skeleton {input.skeleton:q} --out {output:q} {params.options} --threads {threads} --log {log:q}"
 
 
@@ -62,8 +63,7 @@ rule tet_mesh:
     output:
         f"{RESULTS}/tets.h5",
     params:
-        tet_vertices=FILL["tet_vertices"],
-        python=PYTHON,
+        options=config_flags({"tet_vertices": FILL["tet_vertices"]}),
         script=stage_script("tet_mesh"),
         code=stage_code("tet_mesh"),
     threads: 1
@@ -71,23 +71,23 @@ rule tet_mesh:
         f"{RESULTS}/logs/tet_mesh.log",
     benchmark:
         f"{RESULTS}/benchmarks/tet_mesh.tsv"
+    conda:
+        "../envs/posefix.yaml"
     shell:
-        "{params.python:q} {params.script:q} --reference {input.reference:q} --out {output:q}"
-        " --tet-vertices {params.tet_vertices} --threads {threads} --log {log:q}"
+        "python {params.script:q} --reference {input.reference:q} --out {output:q}"
+        " {params.options} --threads {threads} --log {log:q}"
 
 
 rule repair_volumetric:
     input:
         reference=LIBRARY.reference.path,
         target=pose_file,
-        classify=f"{RESULTS}/{{pose}}/classify.h5",
+        classify=rules.classify.output[0],
         tets=rules.tet_mesh.output[0],
     output:
         f"{RESULTS}/{{pose}}/volumetric.h5",
     params:
-        options=" ".join(f"--{key.replace('_', '-')} {FILL[key]}" for key in
-                         ("iterations", "point_weight", "max_rings", "max_free")),
-        python=PYTHON,
+        options=config_flags(FILL, skip=("threads", "tet_vertices")),
         script=stage_script("repair_volumetric"),
         code=stage_code("repair_volumetric"),
     threads: FILL["threads"]
@@ -95,21 +95,22 @@ rule repair_volumetric:
         f"{RESULTS}/logs/{{pose}}/repair_volumetric.log",
     benchmark:
         f"{RESULTS}/benchmarks/{{pose}}/repair_volumetric.tsv"
+    conda:
+        "../envs/posefix.yaml"
     shell:
-        "{params.python:q} {params.script:q} --reference {input.reference:q} --target {input.target:q}"
+        "python {params.script:q} --reference {input.reference:q} --target {input.target:q}"
         " --classify {input.classify:q} --tets {input.tets:q} --out {output:q} {params.options}"
         " --threads {threads} --log {log:q}"
 
 
 rule repair_contact:
     input:
-        keyframes=f"{RESULTS}/{{pose}}/keyframes.h5",
-        classify=f"{RESULTS}/{{pose}}/classify.h5",
+        keyframes=rules.keyframes.output[0],
+        classify=rules.classify.output[0],
     output:
         f"{RESULTS}/{{pose}}/contact.h5",
     params:
-        options=" ".join(f"--{key.replace('_', '-')} {value}" for key, value in config["contact"].items()),
-        python=PYTHON,
+        options=config_flags(config["contact"]),
         script=stage_script("repair_contact"),
         code=stage_code("repair_contact"),
     threads: config["repair_contact"]["threads"]
@@ -117,8 +118,10 @@ rule repair_contact:
         f"{RESULTS}/logs/{{pose}}/repair_contact.log",
     benchmark:
         f"{RESULTS}/benchmarks/{{pose}}/repair_contact.tsv"
+    conda:
+        "../envs/posefix.yaml"
     shell:
-        "{params.python:q} {params.script:q} --keyframes {input.keyframes:q} --classify {input.classify:q}"
+        "python {params.script:q} --keyframes {input.keyframes:q} --classify {input.classify:q}"
         " --out {output:q} {params.options} --threads {threads} --log {log:q}"
 
 
@@ -133,7 +136,6 @@ rule export_baseline:
         baseline="|".join(BASELINE_CHOICES),
         suffix=r"\.(obj|ply|off)(\.gz)?",
     params:
-        python=PYTHON,
         script=stage_script("export"),
         code=stage_code("export"),
     threads: 1
@@ -141,6 +143,8 @@ rule export_baseline:
         f"{RESULTS}/logs/{{pose}}/export_{{baseline}}{{suffix}}.log",
     benchmark:
         f"{RESULTS}/benchmarks/{{pose}}/export_{{baseline}}{{suffix}}.tsv"
+    conda:
+        "../envs/posefix.yaml"
     shell:
-        "{params.python:q} {params.script:q} --artifact {input.artifact:q} --stage repair_{wildcards.baseline}"
+        "python {params.script:q} --artifact {input.artifact:q} --stage repair_{wildcards.baseline}"
         " --reference {input.reference:q} --target {input.target:q} --out {output:q} --log {log:q}"

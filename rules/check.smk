@@ -21,16 +21,10 @@ rule downstream:
             labels={"pose": "{pose}", "figure": "Gauss-Newton check"},
         ),
     params:
-        alphas=",".join(map(str, config["downstream"]["alphas"])),
-        k_bend=",".join(map(str, config["downstream"]["k_bend"])),
-        k_stretch=config["downstream"]["k_stretch"],
-        max_iters=config["downstream"]["max_iters"],
-        rel_tol=config["downstream"]["rel_tol"],
-        stall_iters=config["downstream"]["stall_iters"],
+        options=config_flags(config["downstream"], skip=("threads", "baselines")),
         baselines=lambda wildcards: (
             named_options("--baseline", baseline_artifacts(wildcards.pose)) if CHECK_BASELINES else ""
         ),
-        python=PYTHON,
         script=stage_script("downstream"),
         code=stage_code("downstream"),
     threads: config["downstream"]["threads"]
@@ -38,9 +32,9 @@ rule downstream:
         f"{RESULTS}/logs/{{pose}}/downstream.log",
     benchmark:
         f"{RESULTS}/benchmarks/{{pose}}/downstream.tsv"
+    conda:
+        "../envs/posefix.yaml"
     shell:
-        "{params.python:q} {params.script:q} --keyframes {input.keyframes:q} --verify {input.verify:q}"
-        " --alphas {params.alphas} --k-bend {params.k_bend} --k-stretch {params.k_stretch}"
-        " --max-iters {params.max_iters} --rel-tol {params.rel_tol} --stall-iters {params.stall_iters}"
-        " {params.baselines} --threads {threads} --out {output.h5:q} --png {output.png:q} --pose {wildcards.pose:q}"
+        "python {params.script:q} --keyframes {input.keyframes:q} --verify {input.verify:q}"
+        " {params.options} {params.baselines} --threads {threads} --out {output.h5:q} --png {output.png:q} --pose {wildcards.pose:q}"
         " --log {log:q}"

@@ -1,5 +1,6 @@
 # Helpers of the rules: config validation, the pose library, paths, get_final_output(). No rules here.
 # posefix is installed in the interpreter that runs Snakemake (the venv's under `make run`).
+import os
 import shlex
 import sys
 from pathlib import Path
@@ -8,10 +9,10 @@ import yaml
 from snakemake.utils import validate
 
 from posefix.pipeline import demo
-from posefix.pipeline.cli import named_options
+from posefix.pipeline.cli import config_flags, named_options, put_interpreter_first_on_path
 from posefix.pipeline.config_check import config_problems
 from posefix.pipeline.errors import InputError
-from posefix.pipeline.fingerprint import code_fingerprint
+from posefix.pipeline.fingerprint import CodeFingerprints
 from posefix.pipeline.library import Library, discover_library
 from posefix.pipeline.locks import clear_stale_locks
 from posefix.pipeline.meshes import mesh_file
@@ -53,7 +54,9 @@ if workflow.is_main_process:  # not in the jobs a cluster executor starts: they 
         print(f"posefix: removed {len(_stale)} stale Snakemake lock(s) of an interrupted run in {Path.cwd()} "
               "(no other Snakemake runs there)", file=sys.stderr)
 
-PYTHON = sys.executable  # the interpreter running snakemake: the venv's under `make run`
+# The rules call `python`: a conda environment's under --sdm conda (envs/posefix.yaml), else the interpreter that
+# runs Snakemake (the venv's under `make run` and `posefix repair`), first on the PATH of every job.
+put_interpreter_first_on_path()
 
 
 def stage_script(name):
@@ -61,10 +64,14 @@ def stage_script(name):
     return str(Path(workflow.basedir) / "stages" / f"{name}.py")
 
 
+CODE = CodeFingerprints(Path(workflow.basedir) / "lib", cache=Path(".snakemake") / "posefix-code.json")
+
+
 def stage_code(name):
     """Fingerprint of ``stages/<name>.py`` and the posefix modules it imports (a param of its rule: changed
-    code reruns the stage and what depends on it, and nothing else)."""
-    return code_fingerprint(stage_script(name), Path(workflow.basedir) / "lib")
+    code reruns the stage and what depends on it, and nothing else). Each file is read once per run; the jobs
+    find the run's fingerprints in .snakemake/posefix-code.json (the Snakefile saves it)."""
+    return CODE.fingerprint(stage_script(name))
 
 
 def _pose_list(value):
@@ -144,19 +151,6 @@ def exclude_files(wildcards):
     """Input files of classify: the exclusion file of a pose, if one is configured."""
     value = config["classify"]["exclude"].get(wildcards.pose)
     return [value] if isinstance(value, str) else []
-
-
-def flag(enabled, option):
-    """``option`` when a boolean config value is false, else nothing (for --no-* switches)."""
-    return "" if enabled else option
-
-
-def fit_options(wildcards):
-    """Command-line options of the fit stage from config['fit']."""
-    c = config["fit"]
-    return (f"--eps-rel {c['eps_rel']} --eps-rms-rel {c['eps_rms_rel']} --max-centers {c['max_centers']}"
-            f" --candidates {c['candidates']} --batch {c['batch']} --selection {c['selection']}"
-            f" --update {c['update']} --memory-gb {c['memory_gb']} --device {c['device']}")
 
 
 def repaired_file(pose):

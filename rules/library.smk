@@ -6,9 +6,7 @@ rule demo:
         library_files() if IS_DEMO else [],
     params:
         folder=lambda wildcards, output: os.path.dirname(output[0]),
-        seed=config["demo"]["seed"],
-        around=config["demo"]["around"],
-        python=PYTHON,
+        options=config_flags(config["demo"], skip=("folder",)),
         script=stage_script("demo"),
         code=stage_code("demo"),
     threads: 1
@@ -16,9 +14,11 @@ rule demo:
         f"{RESULTS}/logs/demo.log",
     benchmark:
         f"{RESULTS}/benchmarks/demo.tsv"
+    conda:
+        "../envs/posefix.yaml"
     shell:
-        "{params.python:q} {params.script:q} --out {params.folder:q} --seed {params.seed}"
-        " --around {params.around} --log {log:q}"
+        "python {params.script:q} --out {params.folder:q} {params.options}"
+        " --log {log:q}"
 
 
 rule validate_reference:
@@ -30,7 +30,6 @@ rule validate_reference:
         folder=lambda wildcards, input: os.path.dirname(input[0]),
         reference=LIBRARY.reference.name,
         name=LIBRARY.name,
-        python=PYTHON,
         script=stage_script("validate"),
         code=stage_code("validate"),
     threads: 1
@@ -38,8 +37,10 @@ rule validate_reference:
         f"{RESULTS}/logs/validate_reference.log",
     benchmark:
         f"{RESULTS}/benchmarks/validate_reference.tsv"
+    conda:
+        "../envs/posefix.yaml"
     shell:
-        "{params.python:q} {params.script:q} --library {params.folder:q} --reference {params.reference:q}"
+        "python {params.script:q} --library {params.folder:q} --reference {params.reference:q}"
         " --reference-only --name {params.name:q} --out {output:q} --log {log:q}"
 
 
@@ -54,7 +55,6 @@ rule validate:
         folder=lambda wildcards, input: os.path.dirname(input[0]),
         reference=LIBRARY.reference.name,
         name=LIBRARY.name,
-        python=PYTHON,
         script=stage_script("validate"),
         code=stage_code("validate"),
     threads: 1
@@ -62,6 +62,8 @@ rule validate:
         f"{RESULTS}/logs/{{pose}}/validate.log",
     benchmark:
         f"{RESULTS}/benchmarks/{{pose}}/validate.tsv"
+    conda:
+        "../envs/posefix.yaml"
     shell:
-        "{params.python:q} {params.script:q} --library {params.folder:q} --reference {params.reference:q}"
+        "python {params.script:q} --library {params.folder:q} --reference {params.reference:q}"
         " --poses {wildcards.pose:q} --name {params.name:q} --out {output:q} --log {log:q}"

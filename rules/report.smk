@@ -18,14 +18,15 @@ rule summary:
         poses=",".join(POSES),
         baselines=f"--baselines {','.join(BASELINES)}" if BASELINES else "",
         limit=config["summary"]["distortion_limit"],
-        python=PYTHON,
         script=stage_script("summary"),
         code=stage_code("summary"),
     threads: 1
     log:
         f"{RESULTS}/logs/summary.log",
+    conda:
+        "../envs/posefix.yaml"
     shell:
-        "{params.python:q} {params.script:q} --results {params.results:q} --poses {params.poses:q}"
+        "python {params.script:q} --results {params.results:q} --poses {params.poses:q}"
         " {params.baselines} --distortion-limit {params.limit} --out {output.json:q} --markdown {output.md:q}"
         " --log {log:q}"
 
@@ -45,7 +46,6 @@ rule render:
         benchmarks=lambda wildcards, input: os.path.dirname(input.benchmarks[0]),
         baselines=lambda wildcards: named_options("--baseline", baseline_artifacts(wildcards.pose)),
         limit=config["summary"]["distortion_limit"],
-        python=PYTHON,
         script=stage_script("render"),
         code=stage_code("render"),
     threads: 1
@@ -53,8 +53,10 @@ rule render:
         f"{RESULTS}/logs/{{pose}}/render.log",
     benchmark:
         f"{RESULTS}/benchmarks/{{pose}}/render.tsv"
+    conda:
+        "../envs/posefix.yaml"
     shell:
-        "{params.python:q} {params.script:q} --keyframes {input.keyframes:q} --classify {input.classify:q}"
+        "python {params.script:q} --keyframes {input.keyframes:q} --classify {input.classify:q}"
         " --fit {input.fit:q} --verify {input.verify:q} --benchmarks {params.benchmarks:q}"
         " {params.baselines} --distortion-limit {params.limit} --pose {wildcards.pose:q} --out {params.folder:q}"
         " --log {log:q}"
@@ -77,12 +79,13 @@ rule overview:
             labels={"figure": "summary table"},
         ),
     params:
-        python=PYTHON,
         script=stage_script("overview"),
         code=stage_code("overview"),
     threads: 1
     log:
         f"{RESULTS}/logs/overview.log",
+    conda:
+        "../envs/posefix.yaml"
     shell:
-        "{params.python:q} {params.script:q} --summary {input:q} --png {output.png:q} --html {output.html:q}"
+        "python {params.script:q} --summary {input:q} --png {output.png:q} --html {output.html:q}"
         " --log {log:q}"

@@ -17,17 +17,17 @@ rule author:
         library=directory(f"{AUTHOR['out']}/{AUTHOR_NAME}"),
         artifact=f"{AUTHORED}/skeletal_pose.h5",
     params:
-        python=PYTHON,
         script=stage_script("skeletal_pose"),
         code=stage_code("skeletal_pose"),
-        options=" ".join(f"--{key.replace('_', '-')} {AUTHOR[key]}" for key in
-                         ("medial", "tol", "smooth_iters", "smooth_step", "falloff", "min_sine", "min_area", "tau",
-                          "margin", "neighbours", "max_iters")),
+        name=AUTHOR_NAME,
+        options=config_flags(AUTHOR, skip=("threads", "rig", "mesh", "out")),
     threads: AUTHOR["threads"]
     log:
         f"{AUTHORED}/skeletal_pose.log",
     benchmark:
         f"{AUTHORED}/skeletal_pose.tsv"
+    conda:
+        "../envs/posefix.yaml"
     shell:
-        "{params.python:q} {params.script:q} --mesh {input.mesh:q} --rig {input.rig:q} --out {output.library:q}"
-        " --artifact {output.artifact:q} --name {AUTHOR_NAME:q} {params.options} --threads {threads} --log {log:q}"
+        "python {params.script:q} --mesh {input.mesh:q} --rig {input.rig:q} --out {output.library:q}"
+        " --artifact {output.artifact:q} --name {params.name:q} {params.options} --threads {threads} --log {log:q}"

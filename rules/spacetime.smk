@@ -9,14 +9,7 @@ rule keyframes:
     output:
         f"{RESULTS}/{{pose}}/keyframes.h5",
     params:
-        frames=config["keyframes"]["count"],
-        switches=" ".join(
-            [
-                flag(config["keyframes"]["align"], "--no-align"),
-                flag(config["keyframes"]["unwrap"], "--no-unwrap"),
-            ]
-        ),
-        python=PYTHON,
+        options=config_flags(config["keyframes"]),
         script=stage_script("keyframes"),
         code=stage_code("keyframes"),
     threads: config["keyframes"]["threads"]
@@ -24,9 +17,11 @@ rule keyframes:
         f"{RESULTS}/logs/{{pose}}/keyframes.log",
     benchmark:
         f"{RESULTS}/benchmarks/{{pose}}/keyframes.tsv"
+    conda:
+        "../envs/posefix.yaml"
     shell:
-        "{params.python:q} {params.script:q} --reference {input.reference:q} --target {input.target:q}"
-        " --count {params.frames} {params.switches} --threads {threads} --out {output:q} --log {log:q}"
+        "python {params.script:q} --reference {input.reference:q} --target {input.target:q}"
+        " {params.options} --threads {threads} --out {output:q} --log {log:q}"
 
 
 rule classify:
@@ -36,11 +31,8 @@ rule classify:
     output:
         f"{RESULTS}/{{pose}}/classify.h5",
     params:
-        ring=config["classify"]["ring"],
-        contact=config["classify"]["contact"],
-        radius=config["classify"]["contact_radius"],
+        options=config_flags(config["classify"], skip=("threads", "exclude")),
         exclude=exclude_args,
-        python=PYTHON,
         script=stage_script("classify"),
         code=stage_code("classify"),
     threads: config["classify"]["threads"]
@@ -48,9 +40,11 @@ rule classify:
         f"{RESULTS}/logs/{{pose}}/classify.log",
     benchmark:
         f"{RESULTS}/benchmarks/{{pose}}/classify.tsv"
+    conda:
+        "../envs/posefix.yaml"
     shell:
-        "{params.python:q} {params.script:q} --keyframes {input.keyframes:q} --ring {params.ring}"
-        " --contact {params.contact} --contact-radius {params.radius} {params.exclude}"
+        "python {params.script:q} --keyframes {input.keyframes:q} {params.options}"
+        " {params.exclude}"
         " --threads {threads} --out {output:q} --log {log:q}"
 
 
@@ -61,10 +55,7 @@ rule constraints:
     output:
         f"{RESULTS}/{{pose}}/constraints.h5",
     params:
-        samples=config["constraints"]["samples"],
-        tau=config["constraints"]["tau"],
-        tangents=config["constraints"]["tangents"],
-        python=PYTHON,
+        options=config_flags(config["constraints"]),
         script=stage_script("constraints"),
         code=stage_code("constraints"),
     threads: config["constraints"]["threads"]
@@ -72,9 +63,11 @@ rule constraints:
         f"{RESULTS}/logs/{{pose}}/constraints.log",
     benchmark:
         f"{RESULTS}/benchmarks/{{pose}}/constraints.tsv"
+    conda:
+        "../envs/posefix.yaml"
     shell:
-        "{params.python:q} {params.script:q} --keyframes {input.keyframes:q} --classify {input.classify:q}"
-        " --samples {params.samples} --tau {params.tau} --tangents {params.tangents}"
+        "python {params.script:q} --keyframes {input.keyframes:q} --classify {input.classify:q}"
+        " {params.options}"
         " --threads {threads} --out {output:q} --log {log:q}"
 
 
@@ -84,9 +77,8 @@ rule fit:
     output:
         f"{RESULTS}/{{pose}}/fit.h5",
     params:
-        options=fit_options,
+        options=config_flags(config["fit"]),
         checkpoint=lambda wildcards, output: output[0].replace(".h5", ".checkpoint"),
-        python=PYTHON,
         script=stage_script("fit"),
         code=stage_code("fit"),
     threads: config["fit"]["threads"]
@@ -96,8 +88,10 @@ rule fit:
         f"{RESULTS}/logs/{{pose}}/fit.log",
     benchmark:
         f"{RESULTS}/benchmarks/{{pose}}/fit.tsv"
+    conda:
+        "../envs/posefix.yaml"
     shell:
-        "{params.python:q} {params.script:q} --constraints {input:q} {params.options}"
+        "python {params.script:q} --constraints {input:q} {params.options}"
         " --checkpoint {params.checkpoint:q} --threads {threads} --mem-mb {resources.mem_mb}"
         " --out {output:q} --log {log:q}"
 
@@ -110,12 +104,7 @@ rule integrate:
     output:
         f"{RESULTS}/{{pose}}/integrate.h5",
     params:
-        device=config["integrate"]["device"],
-        rtol=config["integrate"]["rtol"],
-        atol=config["integrate"]["atol_rel"],
-        h0=config["integrate"]["h0"],
-        vec=config["integrate"]["vec"],
-        python=PYTHON,
+        options=config_flags(config["integrate"]),
         script=stage_script("integrate"),
         code=stage_code("integrate"),
     threads: config["integrate"]["threads"]
@@ -123,7 +112,8 @@ rule integrate:
         f"{RESULTS}/logs/{{pose}}/integrate.log",
     benchmark:
         f"{RESULTS}/benchmarks/{{pose}}/integrate.tsv"
+    conda:
+        "../envs/posefix.yaml"
     shell:
-        "{params.python:q} {params.script:q} --fit {input.fit:q} --constraints {input.constraints:q}"
-        " --keyframes {input.keyframes:q} --device {params.device} --rtol {params.rtol} --atol-rel {params.atol}"
-        " --h0 {params.h0} --vec {params.vec} --threads {threads} --out {output:q} --log {log:q}"
+        "python {params.script:q} --fit {input.fit:q} --constraints {input.constraints:q}"
+        " --keyframes {input.keyframes:q} {params.options} --threads {threads} --out {output:q} --log {log:q}"

@@ -19,8 +19,7 @@ rule author_volumetric:
         artifact=f"{VOLUMETRIC_AUTHORED}/volumetric_pose.h5",
     params:
         name=VOLUMETRIC_NAME,
-        options=" ".join(f"--{key.replace('_', '-')} {VOLUMETRIC[key]}" for key in ("tet_vertices", "iterations", "frames")),
-        python=PYTHON,
+        options=config_flags(VOLUMETRIC, skip=("threads", "script", "mesh", "out")),
         script=stage_script("volumetric_pose"),
         code=stage_code("volumetric_pose"),
     threads: VOLUMETRIC["threads"]
@@ -28,8 +27,10 @@ rule author_volumetric:
         f"{VOLUMETRIC_AUTHORED}/volumetric_pose.log",
     benchmark:
         f"{VOLUMETRIC_AUTHORED}/volumetric_pose.tsv"
+    conda:
+        "../envs/posefix.yaml"
     shell:
-        "{params.python:q} {params.script:q} --mesh {input.mesh:q} --script {input.script:q} --out {output.library:q}"
+        "python {params.script:q} --mesh {input.mesh:q} --script {input.script:q} --out {output.library:q}"
         " --artifact {output.artifact:q} --name {params.name:q} {params.options} --threads {threads} --log {log:q}"
 
 
@@ -49,11 +50,9 @@ rule animate_volumetric:
         artifact=f"{ANIMATED}/volumetric_animate.h5",
     params:
         name=ANIMATE_NAME,
-        options=" ".join(f"--{key.replace('_', '-')} {ANIMATE[key]}" for key in
-                         ("attach", "max_offset", "tet_vertices", "iterations", "first_iterations")),
+        options=config_flags(ANIMATE, skip=("threads", "tracks", "mesh", "out", "rigid")),
         rigid=" ".join(f"--rigid {shlex.quote(name + '=' + ','.join(str(float(v)) for c in box for v in c))}"
                        for name, box in ANIMATE["rigid"].items()),
-        python=PYTHON,
         script=stage_script("volumetric_animate"),
         code=stage_code("volumetric_animate"),
     threads: ANIMATE["threads"]
@@ -61,7 +60,9 @@ rule animate_volumetric:
         f"{ANIMATED}/volumetric_animate.log",
     benchmark:
         f"{ANIMATED}/volumetric_animate.tsv"
+    conda:
+        "../envs/posefix.yaml"
     shell:
-        "{params.python:q} {params.script:q} --mesh {input.mesh:q} --tracks {input.tracks:q} --out {output.library:q}"
+        "python {params.script:q} --mesh {input.mesh:q} --tracks {input.tracks:q} --out {output.library:q}"
         " --artifact {output.artifact:q} --name {params.name:q} {params.options} {params.rigid}"
         " --threads {threads} --log {log:q}"

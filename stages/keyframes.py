@@ -46,10 +46,11 @@ def build_parser():
     parser.add_argument("--out", required=True, help="keyframes.h5 to write")
     parser.add_argument("--count", type=count_arg, default=library_defaults(kf.keyframes)["count"],
                         help="number of key frames K")
-    parser.add_argument("--no-align", dest="align", action="store_false",
-                        help="do not remove the global rigid motion first")
-    parser.add_argument("--no-unwrap", dest="unwrap", action="store_false",
-                        help="keep principal rotation branches (no unwrapping)")
+    parser.add_argument("--align", action=argparse.BooleanOptionalAction, default=library_defaults(kf.prepare)["align"],
+                        help="remove the global rigid motion first")
+    parser.add_argument("--unwrap", action=argparse.BooleanOptionalAction,
+                        default=library_defaults(kf.prepare)["unwrap"],
+                        help="unwrap rotation branches over the face adjacency (else principal branches)")
     return parser
 
 

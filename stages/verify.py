@@ -10,6 +10,7 @@ and repaired pose ("new": intersecting in the repaired pose, not in the referenc
 deviation from the target over V_C and the rest. Stage ``export`` writes the mesh.
 """
 
+import argparse
 import json
 from dataclasses import asdict
 
@@ -66,10 +67,11 @@ def build_parser():
                         help="rings grown around fallback triggers (first attempt)")
     parser.add_argument("--max-rings", type=int, default=defaults.max_rings,
                         help="most rings tried around new intersections")
-    parser.add_argument("--no-repair-new", dest="repair_new", action="store_false",
-                        help="do not replace regions with new intersections by the target")
-    parser.add_argument("--no-reproduce", dest="reproduce", action="store_false",
-                        help="keep the integrated positions of the constrained vertices (no snap to the target)")
+    parser.add_argument("--repair-new", action=argparse.BooleanOptionalAction, default=defaults.repair_new,
+                        help="snap finish: replace regions with new intersections by the target")
+    parser.add_argument("--reproduce", action=argparse.BooleanOptionalAction, default=defaults.reproduce,
+                        help="snap finish: put the constrained vertices exactly on their targets (else keep the "
+                        "integrated positions)")
     add_contact_options(parser)
     return parser
 

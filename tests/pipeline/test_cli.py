@@ -5,8 +5,8 @@ import logging
 
 import pytest
 
-from posefix.pipeline.cli import (configure_logging, float_list, int_list, named_options, named_path, run_stage,
-                                 stage_parser)
+from posefix.pipeline.cli import (config_flags, configure_logging, float_list, int_list, named_options, named_path,
+                                 run_stage, stage_parser)
 from posefix.pipeline.errors import InputError
 
 
@@ -73,3 +73,32 @@ def test_errors_become_one_line_and_an_exit_code(capsys, posefix_logger):
     assert _run(bad_input) == 2 and capsys.readouterr().err.strip().endswith("posefix demo: error: a.obj: no faces")
     assert _run(no_disk) == 1 and "error: out.h5: No space left on device" in capsys.readouterr().err
     assert stage_parser("demo", "").parse_args([]).threads == 1
+
+
+def test_config_flags_are_what_the_stage_parsers_read():
+    parser = argparse.ArgumentParser()
+    parser.add_argument("--count", type=int)
+    parser.add_argument("--align", action=argparse.BooleanOptionalAction, default=True)
+    parser.add_argument("--alphas", type=float_list)
+    parser.add_argument("--tracks")
+    section = {"count": 11, "align": False, "alphas": [0.5, 1.0], "tracks": "my tracks.csv", "vec": None,
+               "threads": 2}
+    import shlex
+    args = parser.parse_args(shlex.split(config_flags(section, skip=("threads", "vec"))))
+    assert (args.count, args.align, args.alphas, args.tracks) == (11, False, [0.5, 1.0], "my tracks.csv")
+    assert "--vec" not in config_flags(section) and "--threads" not in config_flags(section)
+    with pytest.raises(TypeError, match="exclude: a dict"):
+        config_flags({"exclude": {}})
+
+
+def test_an_unexpected_error_reaches_the_log_file(tmp_path, capsys, posefix_logger):
+    def bug(args, log):
+        raise ZeroDivisionError("a bug")
+
+    parser = stage_parser("demo", "a test stage")
+    with pytest.raises(ZeroDivisionError):
+        run_stage(parser, bug, ["--log", str(tmp_path / "demo.log")])
+    for handler in posefix_logger.handlers:
+        handler.flush()
+    text = (tmp_path / "demo.log").read_text()
+    assert "unexpected error" in text and "ZeroDivisionError: a bug" in text

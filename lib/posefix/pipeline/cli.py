@@ -13,10 +13,12 @@ stderr, everything (DEBUG too) in the ``--log`` file. Library modules log throug
 import argparse
 import inspect
 import logging
+import os
 import shlex
 import signal
 import sys
 import time
+from pathlib import Path
 
 from threadpoolctl import threadpool_limits
 
@@ -57,6 +59,9 @@ def run_stage(parser, main, argv=None):
     except KeyboardInterrupt:
         print(f"posefix {args.stage}: interrupted; no output written", file=sys.stderr)
         sys.exit(130)
+    except Exception:  # a bug: the traceback to stderr (Python's) and to the log file
+        log.debug("unexpected error", exc_info=True)
+        raise
     log.info("done in %.2f s", time.perf_counter() - start)
 
 
@@ -124,6 +129,51 @@ def named_path(text):
     if not (sep and name and path):
         raise argparse.ArgumentTypeError(f"not NAME=PATH: {text!r}")
     return name, path
+
+
+def config_flags(section, skip=("threads",)):
+    """A stage's command-line options from its config section (the one way the rules turn config into flags).
+
+    ``key: value`` becomes ``--key-name value``; a boolean ``--key-name`` or ``--no-key-name``; a list its
+    items joined by commas (:func:`int_list`, :func:`float_list`); None is left out (the stage's default). Keys
+    of ``skip`` are not options (threads are the rule's).
+
+    Parameters
+    ----------
+    section : dict
+        The config section, e.g. ``config["keyframes"]``.
+    skip : sequence of str
+
+    Returns
+    -------
+    str
+        Shell-quoted options.
+
+    Examples
+    --------
+    >>> config_flags({"count": 11, "align": False, "alphas": [0.5, 1.0], "device": "auto", "threads": 2})
+    '--count 11 --no-align --alphas 0.5,1.0 --device auto'
+    """
+    flags = []
+    for key, value in section.items():
+        name = "--" + key.replace("_", "-")
+        if key in skip or value is None:
+            continue
+        if isinstance(value, bool):
+            flags.append(name if value else "--no-" + name[2:])
+        elif isinstance(value, (list, tuple)):
+            flags += [name, shlex.quote(",".join(map(str, value)))]
+        elif isinstance(value, dict):
+            raise TypeError(f"{key}: a dict is no command-line option; skip it and pass it otherwise")
+        else:
+            flags += [name, shlex.quote(str(value))]
+    return " ".join(flags)
+
+
+def put_interpreter_first_on_path():
+    """Put the folder of the running interpreter first on ``PATH`` (the workflow's rules call ``python``: the
+    interpreter that runs Snakemake, e.g. a venv's, unless a conda environment of the rule comes first)."""
+    os.environ["PATH"] = os.pathsep.join([str(Path(sys.executable).parent), os.environ.get("PATH", "")])
 
 
 def named_options(option, paths):
