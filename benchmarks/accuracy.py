@@ -22,7 +22,7 @@ import h5py
 import numpy as np
 from scipy.interpolate import CubicSpline
 
-from posefix.pipeline.timings import benchmark_seconds
+from posefix.workflow.timings import benchmark_seconds
 from posefix.spacetime.rbf import RBFField
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -26,7 +26,7 @@ from posefix.mesh.harmonic import harmonic_extension
 from posefix.mesh.intersections import intersecting_faces, self_intersecting_pairs
 from posefix.mesh.sampling import geodesic_farthest_points
 from posefix.mesh.topology import vertex_adjacency
-from posefix.pipeline.meshes import read_mesh
+from posefix.io.meshes import read_mesh
 from posefix.volumetric.markers import MarkerAnimator
 from posefix.volumetric.tet_mesh import tet_mesh
 

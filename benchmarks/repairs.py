@@ -26,7 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
-from posefix.pipeline.timings import benchmark_seconds
+from posefix.workflow.timings import benchmark_seconds
 from posefix.report.tables import pose_status, repair_seconds
 
 ROOT = Path(__file__).resolve().parents[1]

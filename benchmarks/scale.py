@@ -22,7 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
-from posefix.pipeline.timings import benchmark_row
+from posefix.workflow.timings import benchmark_row
 
 ROOT = Path(__file__).resolve().parents[1]
 DATA = Path(os.environ.get("POSEFIX_DATA", ROOT.parent / "shared" / "data"))

@@ -21,9 +21,9 @@ from threadpoolctl import threadpool_limits
 
 from posefix.mesh.geometry import bbox_diagonal
 from posefix.mesh.intersections import intersecting_faces, self_intersecting_pairs
-from posefix.pipeline import demo
-from posefix.pipeline.meshes import read_mesh
-from posefix.pipeline.rigs import read_rig
+from posefix.workflow import demo
+from posefix.io.meshes import read_mesh
+from posefix.skeletal.rig_files import read_rig
 from posefix.skeletal.authoring import SkeletalPoser, union_error
 from posefix.skeletal.flow import MedialBallFlow
 from posefix.skeletal.rig import Rig, pose_from_rotation_vectors

@@ -20,7 +20,7 @@ from threadpoolctl import threadpool_limits
 
 from posefix.mesh.geometry import bbox_diagonal
 from posefix.mesh.rotations import rotation_exp
-from posefix.pipeline.library import read_reference
+from posefix.io.library import read_reference
 from posefix.volumetric.editor import ROTATIONS, VolumetricEditor
 from posefix.volumetric.shapes import tet_cylinder, tet_grid
 from posefix.volumetric.tet_mesh import tet_mesh

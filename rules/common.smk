@@ -8,14 +8,14 @@ from pathlib import Path
 import yaml
 from snakemake.utils import validate
 
-from posefix.pipeline import demo
-from posefix.pipeline.cli import config_flags, named_options, put_interpreter_first_on_path
-from posefix.pipeline.config_check import config_problems
-from posefix.pipeline.errors import InputError
-from posefix.pipeline.fingerprint import CodeFingerprints
-from posefix.pipeline.library import Library, discover_library
-from posefix.pipeline.locks import clear_stale_locks
-from posefix.pipeline.meshes import mesh_file
+from posefix.workflow import demo
+from posefix.workflow.cli import config_flags, named_options, put_interpreter_first_on_path
+from posefix.workflow.config_check import config_problems
+from posefix.io.errors import InputError
+from posefix.workflow.fingerprint import CodeFingerprints
+from posefix.io.library import Library, discover_library
+from posefix.workflow.locks import clear_stale_locks
+from posefix.io.meshes import mesh_file
 from posefix.report.contents import POSE_FIGURES, TIMED_STAGES
 
 

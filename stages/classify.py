@@ -8,17 +8,17 @@ intersect in the reference are added back (S0 §4.3). See ``posefix.spacetime.cl
 
 import time
 
-import posefix.pipeline.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; runtime defaults before numpy)
+import posefix.workflow.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; runtime defaults before numpy)
 import numpy as np
 
 from posefix.mesh.contacts import contact_vertices
 from posefix.mesh.geometry import bbox_diagonal
 from posefix.mesh.intersections import intersecting_faces, new_pairs, self_intersecting_pairs
-from posefix.pipeline.artifacts import read_artifact, write_artifact
-from posefix.pipeline.cli import int_list, library_defaults, run_stage, stage_parser
-from posefix.pipeline.errors import InputError
-from posefix.pipeline.library import read_vertex_ids
-from posefix.pipeline.timings import Timings
+from posefix.io.artifacts import read_artifact, write_artifact
+from posefix.workflow.cli import int_list, library_defaults, run_stage, stage_parser
+from posefix.io.errors import InputError
+from posefix.io.library import read_vertex_ids
+from posefix.workflow.timings import Timings
 from posefix.spacetime.classification import constraint_mask
 
 DOCS = {

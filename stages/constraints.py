@@ -6,13 +6,13 @@ space-time points y = (c(t_i), tau t_i) and tangents c'(t_i) the field must inte
 ``posefix.spacetime.constraints``.
 """
 
-import posefix.pipeline.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; runtime defaults before numpy)
+import posefix.workflow.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; runtime defaults before numpy)
 
 from posefix.mesh.geometry import bbox_diagonal
-from posefix.pipeline.artifacts import read_artifact, write_artifact
-from posefix.pipeline.cli import library_defaults, run_stage, stage_parser
-from posefix.pipeline.errors import InputError
-from posefix.pipeline.timings import Timings
+from posefix.io.artifacts import read_artifact, write_artifact
+from posefix.workflow.cli import library_defaults, run_stage, stage_parser
+from posefix.io.errors import InputError
+from posefix.workflow.timings import Timings
 from posefix.spacetime.constraints import spacetime_constraints
 
 DOCS = {

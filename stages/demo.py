@@ -7,13 +7,13 @@ Deterministic: the same seed gives byte-identical files.
 
 from pathlib import Path
 
-import posefix.pipeline.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; runtime defaults before numpy)
+import posefix.workflow.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; runtime defaults before numpy)
 
 from posefix.mesh.intersections import intersecting_faces, self_intersecting_pairs
-from posefix.pipeline import demo
-from posefix.pipeline.cli import library_defaults, run_stage, stage_parser
-from posefix.pipeline.meshes import write_mesh
-from posefix.pipeline.timings import Timings
+from posefix.workflow import demo
+from posefix.workflow.cli import library_defaults, run_stage, stage_parser
+from posefix.io.meshes import write_mesh
+from posefix.workflow.timings import Timings
 
 
 def build_parser():

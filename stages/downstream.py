@@ -10,14 +10,14 @@ of the energy per iteration (``posefix.report.figures.downstream_history``). Wit
 runs at a time (processes of one thread each; the same iterations and stop reasons).
 """
 
-import posefix.pipeline.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; runtime defaults before numpy)
+import posefix.workflow.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; runtime defaults before numpy)
 
 from posefix.check.downstream import downstream_check
 from posefix.check.gauss_newton import STOP_REASONS, SolverSettings
-from posefix.pipeline.artifacts import read_artifact, read_baseline, write_artifact
-from posefix.pipeline.cli import float_list, library_defaults, named_path, run_stage, stage_parser
-from posefix.pipeline.files import write_figure
-from posefix.pipeline.timings import Timings
+from posefix.io.artifacts import read_artifact, read_baseline, write_artifact
+from posefix.workflow.cli import float_list, library_defaults, named_path, run_stage, stage_parser
+from posefix.io.files import write_figure
+from posefix.workflow.timings import Timings
 from posefix.report import figures
 
 DOCS = {

@@ -2,18 +2,18 @@
 
 Same format and compression as the target file, identical faces and vertex order; for OBJ the
 target's text is kept line by line except for the vertex (and per-vertex normal) lines (see
-``posefix.pipeline.meshes.write_like``).
+``posefix.io.meshes.write_like``).
 """
 
-import posefix.pipeline.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; runtime defaults before numpy)
+import posefix.workflow.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; runtime defaults before numpy)
 import numpy as np
 
-from posefix.pipeline.artifacts import read_artifact
-from posefix.pipeline.cli import run_stage, stage_parser
-from posefix.pipeline.errors import InputError
-from posefix.pipeline.library import read_welded_reference
-from posefix.pipeline.meshes import read_mesh, write_like
-from posefix.pipeline.timings import Timings
+from posefix.io.artifacts import read_artifact
+from posefix.workflow.cli import run_stage, stage_parser
+from posefix.io.errors import InputError
+from posefix.io.library import read_welded_reference
+from posefix.io.meshes import read_mesh, write_like
+from posefix.workflow.timings import Timings
 
 
 def build_parser():

@@ -10,16 +10,16 @@ same result as an uninterrupted fit. See ``posefix.spacetime.fit`` and ``posefix
 import json
 from pathlib import Path
 
-import posefix.pipeline.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; runtime defaults before numpy)
+import posefix.workflow.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; runtime defaults before numpy)
 import numpy as np
 
-from posefix.pipeline import checkpoint
-from posefix.pipeline.artifacts import config_hash, read_artifact, write_artifact
-from posefix.pipeline.cli import library_defaults, run_stage, stage_parser
-from posefix.pipeline.errors import InputError
-from posefix.pipeline.files import file_sha256
-from posefix.pipeline.resources import cache_budget, opencl_device
-from posefix.pipeline.timings import Timings
+from posefix.spacetime import fit_checkpoint as checkpoint
+from posefix.io.artifacts import config_hash, read_artifact, write_artifact
+from posefix.workflow.cli import library_defaults, run_stage, stage_parser
+from posefix.io.errors import InputError
+from posefix.io.files import file_sha256
+from posefix.workflow.resources import cache_budget, opencl_device
+from posefix.workflow.timings import Timings
 from posefix.spacetime.factorization import FactorizationError
 from posefix.spacetime.fit import FitSettings, cache_fits, fit_memory, iterate
 

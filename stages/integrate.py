@@ -6,14 +6,14 @@ steps, on an OpenCL device (one work-item per vertex, float64) or, when none is 
 Steps land on the constraint sample times t_i = i/s, where positions are recorded.
 """
 
-import posefix.pipeline.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; runtime defaults before numpy)
+import posefix.workflow.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; runtime defaults before numpy)
 import numpy as np
 
-from posefix.pipeline.artifacts import read_artifact, write_artifact
-from posefix.pipeline.cli import library_defaults, run_stage, stage_parser
-from posefix.pipeline.errors import InputError
-from posefix.pipeline.resources import opencl_device
-from posefix.pipeline.timings import Timings
+from posefix.io.artifacts import read_artifact, write_artifact
+from posefix.workflow.cli import library_defaults, run_stage, stage_parser
+from posefix.io.errors import InputError
+from posefix.workflow.resources import opencl_device
+from posefix.workflow.timings import Timings
 from posefix.spacetime.integration import field_velocity, rk45
 from posefix.spacetime.rbf import RBFField
 

@@ -8,14 +8,14 @@ t = k/(K-1), the two input poses, and per-face rotation diagnostics.
 import argparse
 from pathlib import Path
 
-import posefix.pipeline.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; runtime defaults before numpy)
+import posefix.workflow.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; runtime defaults before numpy)
 import numpy as np
 
 from posefix.mesh.geometry import bbox_diagonal
-from posefix.pipeline.artifacts import write_artifact
-from posefix.pipeline.cli import library_defaults, run_stage, stage_parser
-from posefix.pipeline.library import read_welded_pair
-from posefix.pipeline.timings import Timings
+from posefix.io.artifacts import write_artifact
+from posefix.workflow.cli import library_defaults, run_stage, stage_parser
+from posefix.io.library import read_welded_pair
+from posefix.workflow.timings import Timings
 from posefix.spacetime import keyframes as kf
 
 DOCS = {

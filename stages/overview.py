@@ -8,12 +8,12 @@ the bar, centres and fallback vertices, seconds per stage, one column per pose) 
 import json
 from pathlib import Path
 
-import posefix.pipeline.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; runtime defaults before numpy)
+import posefix.workflow.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; runtime defaults before numpy)
 
-from posefix.pipeline.cli import run_stage, stage_parser
-from posefix.pipeline.errors import InputError
-from posefix.pipeline.files import atomic_write_bytes, write_figure
-from posefix.pipeline.timings import Timings
+from posefix.workflow.cli import run_stage, stage_parser
+from posefix.io.errors import InputError
+from posefix.io.files import atomic_write_bytes, write_figure
+from posefix.workflow.timings import Timings
 from posefix.report.figures import library_overview
 from posefix.report.tables import DEVIATION_BAR, pose_status, summary_html
 

@@ -12,14 +12,14 @@ the reference (the same for every pose of a library). Figures are built in ``pos
 import json
 from pathlib import Path
 
-import posefix.pipeline.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; runtime defaults before numpy)
+import posefix.workflow.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; runtime defaults before numpy)
 
 from posefix.mesh.distortion import distorted_faces, distortion_summary
 from posefix.mesh.intersections import intersecting_faces, self_intersecting_pairs
-from posefix.pipeline.artifacts import read_artifact, read_baseline
-from posefix.pipeline.cli import library_defaults, named_path, run_stage, stage_parser
-from posefix.pipeline.files import write_figure
-from posefix.pipeline.timings import Timings, benchmark_seconds
+from posefix.io.artifacts import read_artifact, read_baseline
+from posefix.workflow.cli import library_defaults, named_path, run_stage, stage_parser
+from posefix.io.files import write_figure
+from posefix.workflow.timings import Timings, benchmark_seconds
 from posefix.report import figures
 from posefix.report.contents import POSE_FIGURES, TIMED_STAGES
 from posefix.report.rasterizer import camera

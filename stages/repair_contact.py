@@ -6,16 +6,16 @@ intersection that the reference does not have can form (the reference's own, fro
 tolerated). See ``posefix.contact.keyframe_tracking``.
 """
 
-import posefix.pipeline.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; runtime defaults before numpy)
+import posefix.workflow.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; runtime defaults before numpy)
 import numpy as np
 
 from posefix.contact.keyframe_tracking import track_keyframes
 from posefix.mesh.contact_solver import ContactSolver
 from posefix.mesh.intersections import intersecting_faces
-from posefix.pipeline.artifacts import read_artifact, write_artifact
-from posefix.pipeline.cli import run_stage, stage_parser
-from posefix.pipeline.contact_options import add_contact_options, contact_settings
-from posefix.pipeline.timings import Timings
+from posefix.io.artifacts import read_artifact, write_artifact
+from posefix.workflow.cli import run_stage, stage_parser
+from posefix.workflow.contact_options import add_contact_options, contact_settings
+from posefix.workflow.timings import Timings
 from posefix.spacetime.classification import split_frames
 
 DOCS = {

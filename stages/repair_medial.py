@@ -5,14 +5,14 @@ them and runs S1's medial-ball flow until no new self-intersection remains (inte
 has too do not count) or ``--max-iters``. See ``posefix.skeletal.repair``.
 """
 
-import posefix.pipeline.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; runtime defaults before numpy)
+import posefix.workflow.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; runtime defaults before numpy)
 
 from posefix.mesh.geometry import bbox_diagonal
-from posefix.pipeline.artifacts import read_artifact, write_artifact
-from posefix.pipeline.cli import library_defaults, run_stage, stage_parser
-from posefix.pipeline.errors import InputError
-from posefix.pipeline.library import read_welded_pair
-from posefix.pipeline.timings import Timings
+from posefix.io.artifacts import read_artifact, write_artifact
+from posefix.workflow.cli import library_defaults, run_stage, stage_parser
+from posefix.io.errors import InputError
+from posefix.io.library import read_welded_pair
+from posefix.workflow.timings import Timings
 from posefix.skeletal.repair import MedialRepair
 
 DOCS = {

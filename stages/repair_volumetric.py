@@ -6,13 +6,13 @@ The free region grows by rings until no new self-intersection remains (intersect
 too do not count). See ``posefix.volumetric.fill``.
 """
 
-import posefix.pipeline.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; runtime defaults before numpy)
+import posefix.workflow.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; runtime defaults before numpy)
 
-from posefix.pipeline.artifacts import read_artifact, write_artifact
-from posefix.pipeline.cli import library_defaults, run_stage, stage_parser
-from posefix.pipeline.errors import InputError
-from posefix.pipeline.library import read_welded_pair
-from posefix.pipeline.timings import Timings
+from posefix.io.artifacts import read_artifact, write_artifact
+from posefix.workflow.cli import library_defaults, run_stage, stage_parser
+from posefix.io.errors import InputError
+from posefix.io.library import read_welded_pair
+from posefix.workflow.timings import Timings
 from posefix.volumetric.fill import VolumetricFill
 
 DOCS = {

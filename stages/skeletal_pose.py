@@ -11,19 +11,19 @@ history.
 
 from pathlib import Path
 
-import posefix.pipeline.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; runtime defaults before numpy)
+import posefix.workflow.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; runtime defaults before numpy)
 
 import numpy as np
 
 from posefix.mesh.geometry import bbox_diagonal
 from posefix.mesh.intersections import intersecting_faces, self_intersecting_pairs
-from posefix.pipeline.artifacts import write_artifact
-from posefix.pipeline.cli import library_defaults, run_stage, stage_parser
-from posefix.pipeline.library import read_reference
-from posefix.pipeline.meshes import mesh_file, write_like
-from posefix.pipeline.rigs import read_rig
-from posefix.pipeline.skeletons import add_skeleton_options, reference_skeleton
-from posefix.pipeline.timings import Timings
+from posefix.io.artifacts import write_artifact
+from posefix.workflow.cli import library_defaults, run_stage, stage_parser
+from posefix.io.library import read_reference
+from posefix.io.meshes import mesh_file, write_like
+from posefix.skeletal.rig_files import read_rig
+from posefix.workflow.skeleton_options import add_skeleton_options, reference_skeleton
+from posefix.workflow.timings import Timings
 from posefix.skeletal.authoring import VARIANTS, SkeletalPoser, union_error
 
 DOCS = {

@@ -4,15 +4,15 @@ The medial repair (stage repair_medial) carries these balls into every target po
 ``posefix.skeletal.skeletal_mesh``.
 """
 
-import posefix.pipeline.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; runtime defaults before numpy)
+import posefix.workflow.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; runtime defaults before numpy)
 
 import numpy as np
 
-from posefix.pipeline.artifacts import write_artifact
-from posefix.pipeline.cli import run_stage, stage_parser
-from posefix.pipeline.library import read_welded_reference
-from posefix.pipeline.skeletons import add_skeleton_options, reference_skeleton
-from posefix.pipeline.timings import Timings
+from posefix.io.artifacts import write_artifact
+from posefix.workflow.cli import run_stage, stage_parser
+from posefix.io.library import read_welded_reference
+from posefix.workflow.skeleton_options import add_skeleton_options, reference_skeleton
+from posefix.workflow.timings import Timings
 
 DOCS = {
     "S": ("length", "skeletal mesh vertices (medial-ball centres), (n, 3) float64"),

@@ -13,14 +13,14 @@ import json
 from functools import partial
 from pathlib import Path
 
-import posefix.pipeline.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; runtime defaults before numpy)
+import posefix.workflow.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; runtime defaults before numpy)
 
-from posefix.pipeline.artifacts import read_artifact, read_baseline
+from posefix.io.artifacts import read_artifact, read_baseline
 from posefix.mesh.distortion import distortion_summary
-from posefix.pipeline.cli import library_defaults, run_stage, stage_parser
-from posefix.pipeline.errors import InputError
-from posefix.pipeline.files import atomic_write_bytes
-from posefix.pipeline.timings import benchmark_seconds
+from posefix.workflow.cli import library_defaults, run_stage, stage_parser
+from posefix.io.errors import InputError
+from posefix.io.files import atomic_write_bytes
+from posefix.workflow.timings import benchmark_seconds
 from posefix.repair.deviation import deviation
 from posefix.report.summary import DOWNSTREAM_DATASETS, SUMMARY_STAGES, baseline_entry, pose_entry, summary_markdown
 

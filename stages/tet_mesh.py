@@ -5,13 +5,13 @@ Quadric decimation, then a Delaunay tetrahedralization kept inside the reference
 target pose.
 """
 
-import posefix.pipeline.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; runtime defaults before numpy)
+import posefix.workflow.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; runtime defaults before numpy)
 
-from posefix.pipeline.artifacts import write_artifact
-from posefix.pipeline.cli import library_defaults, run_stage, stage_parser
-from posefix.pipeline.errors import InputError
-from posefix.pipeline.library import read_welded_reference
-from posefix.pipeline.timings import Timings
+from posefix.io.artifacts import write_artifact
+from posefix.workflow.cli import library_defaults, run_stage, stage_parser
+from posefix.io.errors import InputError
+from posefix.io.library import read_welded_reference
+from posefix.workflow.timings import Timings
 from posefix.volumetric.tet_mesh import tet_mesh
 
 DOCS = {

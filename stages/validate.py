@@ -9,16 +9,16 @@ a manifest (name, path, format, sha256) of the files read. The workflow runs it 
 so adding or fixing a pose reruns only that pose.
 """
 
-import posefix.pipeline.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; runtime defaults before numpy)
+import posefix.workflow.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; runtime defaults before numpy)
 import numpy as np
 
 from posefix.mesh.geometry import bbox_diagonal
-from posefix.pipeline.artifacts import write_artifact
-from posefix.pipeline.cli import run_stage, stage_parser
-from posefix.pipeline.files import file_sha256
+from posefix.io.artifacts import write_artifact
+from posefix.workflow.cli import run_stage, stage_parser
+from posefix.io.files import file_sha256
 from posefix.mesh.weld import Weld
-from posefix.pipeline.library import check_seams, discover_library, read_pose, read_reference
-from posefix.pipeline.timings import Timings
+from posefix.io.library import check_seams, discover_library, read_pose, read_reference
+from posefix.workflow.timings import Timings
 
 DOCS = {
     "reference/vertices": ("length", "reference vertex positions, (n, 3) float64"),

@@ -14,13 +14,13 @@ import argparse
 import json
 from dataclasses import asdict
 
-import posefix.pipeline.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; runtime defaults before numpy)
+import posefix.workflow.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; runtime defaults before numpy)
 
 from posefix.mesh.contact_solver import ContactSolver
-from posefix.pipeline.artifacts import read_artifact, write_artifact
-from posefix.pipeline.cli import run_stage, stage_parser
-from posefix.pipeline.contact_options import add_contact_options, contact_settings
-from posefix.pipeline.timings import Timings
+from posefix.io.artifacts import read_artifact, write_artifact
+from posefix.workflow.cli import run_stage, stage_parser
+from posefix.workflow.contact_options import add_contact_options, contact_settings
+from posefix.workflow.timings import Timings
 from posefix.repair.contact_finish import FinishSettings
 from posefix.repair.flags import describe_flags
 from posefix.repair.sequence import RepairSettings, finish_pose, repair_pose

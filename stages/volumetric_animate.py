@@ -11,19 +11,19 @@ artifact records the marker residuals per frame.
 import argparse
 from pathlib import Path
 
-import posefix.pipeline.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; runtime defaults before numpy)
+import posefix.workflow.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; runtime defaults before numpy)
 
 import numpy as np
 
 from posefix.mesh.distance import surface_distance_below
 from posefix.mesh.geometry import bbox_diagonal
-from posefix.pipeline.artifacts import write_artifact
-from posefix.pipeline.cli import library_defaults, run_stage, stage_parser
-from posefix.pipeline.errors import InputError
-from posefix.pipeline.library import read_reference
-from posefix.pipeline.marker_tracks import read_tracks
-from posefix.pipeline.meshes import mesh_file, write_like
-from posefix.pipeline.timings import Timings
+from posefix.io.artifacts import write_artifact
+from posefix.workflow.cli import library_defaults, run_stage, stage_parser
+from posefix.io.errors import InputError
+from posefix.io.library import read_reference
+from posefix.io.marker_tracks import read_tracks
+from posefix.io.meshes import mesh_file, write_like
+from posefix.workflow.timings import Timings
 from posefix.volumetric.authoring import region_tets
 from posefix.volumetric.markers import MarkerAnimator
 from posefix.volumetric.tet_mesh import tet_mesh

@@ -10,17 +10,17 @@ and seconds per pose.
 
 from pathlib import Path
 
-import posefix.pipeline.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; runtime defaults before numpy)
+import posefix.workflow.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; runtime defaults before numpy)
 
 import numpy as np
 
-from posefix.pipeline.artifacts import write_artifact
-from posefix.pipeline.cli import library_defaults, run_stage, stage_parser
-from posefix.pipeline.errors import InputError
-from posefix.pipeline.library import read_reference
-from posefix.pipeline.meshes import mesh_file, write_like
-from posefix.pipeline.pose_scripts import read_pose_script
-from posefix.pipeline.timings import Timings
+from posefix.io.artifacts import write_artifact
+from posefix.workflow.cli import library_defaults, run_stage, stage_parser
+from posefix.io.errors import InputError
+from posefix.io.library import read_reference
+from posefix.io.meshes import mesh_file, write_like
+from posefix.io.pose_scripts import read_pose_script
+from posefix.workflow.timings import Timings
 from posefix.volumetric.authoring import VolumetricPoser, region_tets
 from posefix.volumetric.tet_mesh import tet_mesh
 

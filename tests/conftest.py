@@ -106,7 +106,7 @@ def demo_run(tmp_path_factory):
 @pytest.fixture(scope="session")
 def demo():
     """The demo library in memory: (V_ref, F, poses dict)."""
-    from posefix.pipeline.demo import demo_library
+    from posefix.workflow.demo import demo_library
     return demo_library()
 
 

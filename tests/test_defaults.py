@@ -20,7 +20,7 @@ from posefix.check.shells import shell_energy
 from posefix.mesh.contact_solver import ContactSettings
 from posefix.mesh.contacts import contact_vertices
 from posefix.mesh.distortion import distortion_summary
-from posefix.pipeline.demo import demo_library
+from posefix.workflow.demo import demo_library
 from posefix.repair.contact_finish import FinishSettings
 from posefix.repair.sequence import RepairSettings
 from posefix.skeletal.authoring import SkeletalPoser

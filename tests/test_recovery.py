@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from conftest import ROOT, icosphere, split_along_a_seam, with_quick_downstream
-from posefix.pipeline.meshes import write_mesh
+from posefix.io.meshes import write_mesh
 
 pytestmark = pytest.mark.pipeline
 
@@ -145,7 +145,7 @@ def test_a_config_mistake_is_one_line_naming_the_key(checkout, tmp_path, setting
 
 
 def test_a_library_split_along_a_seam_is_repaired_welded_and_split_again(checkout, tmp_path, demo, demo_run):
-    from posefix.pipeline.meshes import read_mesh
+    from posefix.io.meshes import read_mesh
     V, F, poses = demo
     F2, shared, copies = split_along_a_seam(V, F)
     library = tmp_path / "seams"

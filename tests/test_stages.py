@@ -10,7 +10,7 @@ import pytest
 
 from conftest import ROOT, run_stage
 from posefix import __version__
-from posefix.pipeline.artifacts import config_hash, inputs_hash
+from posefix.io.artifacts import config_hash, inputs_hash
 
 STAGES = ["demo", "validate", "keyframes", "classify", "constraints", "fit", "integrate", "verify", "export",
           "downstream", "summary", "render", "overview", "skeletal_pose", "skeleton", "repair_medial",
@@ -129,7 +129,7 @@ def test_downstream_with_threads_runs_the_grid_in_parallel_to_the_same_results(d
 def medial(demo_artifacts):
     """A baseline artifact as stage repair_medial writes it (the datasets the report reads), whose
     repaired pose is S0's (verify.h5's)."""
-    from posefix.pipeline.artifacts import write_artifact
+    from posefix.io.artifacts import write_artifact
     with h5py.File(demo_artifacts / "keyframes.h5", "r") as fh:
         target = fh["target"][()]
     with h5py.File(demo_artifacts / "verify.h5", "r") as fh:
@@ -240,7 +240,7 @@ def test_export_reproduces_the_target_file_but_the_vertex_lines(demo_artifacts, 
 
 def test_export_refuses_a_target_of_another_size(demo_artifacts, tmp_path):
     from conftest import icosphere
-    from posefix.pipeline.meshes import write_mesh
+    from posefix.io.meshes import write_mesh
     V, F = icosphere(1)
     write_mesh(tmp_path / "ball.obj", V, F)
     proc = run_stage("export", "--artifact", demo_artifacts / "verify.h5", "--reference",
@@ -253,8 +253,8 @@ def test_export_refuses_a_target_of_another_size(demo_artifacts, tmp_path):
 @pytest.fixture(scope="module")
 def authored(tmp_path_factory):
     """skeletal_pose on a small demo limb (12 vertices per ring) with the shipped demo rig."""
-    from posefix.pipeline import demo
-    from posefix.pipeline.meshes import write_mesh
+    from posefix.workflow import demo
+    from posefix.io.meshes import write_mesh
     folder = tmp_path_factory.mktemp("authored")
     V, F, _ = demo.demo_library(around=12)
     write_mesh(folder / "limb.obj", V, F)
@@ -265,7 +265,7 @@ def authored(tmp_path_factory):
 
 
 def test_skeletal_pose_writes_a_library_of_every_pose_and_variant(authored):
-    from posefix.pipeline.library import discover_library, read_pose
+    from posefix.io.library import discover_library, read_pose
     folder, V, F = authored
     library = discover_library(folder / "lib")
     assert library.reference.name == "demo-limb-reference"
@@ -318,8 +318,8 @@ def test_ctrl_c_during_a_stage_s_imports_exits_quietly_with_130():
         modules = [node.names[0].name if isinstance(node, ast.Import) else node.module for node in tree.body
                    if isinstance(node, (ast.Import, ast.ImportFrom))]
         first = next(m for m in modules if m.split(".")[0] not in sys.stdlib_module_names)
-        assert first == "posefix.pipeline.interrupt", stage
-    code = ("import os, runpy, signal, sys; import posefix.pipeline.interrupt; sys.argv = ['render.py', '--help']; "
+        assert first == "posefix.workflow.interrupt", stage
+    code = ("import os, runpy, signal, sys; import posefix.workflow.interrupt; sys.argv = ['render.py', '--help']; "
             "os.kill(os.getpid(), signal.SIGINT); runpy.run_path(sys.argv[0])")
     import subprocess
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT / "stages")

@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 from conftest import ROOT, shared_library, with_quick_downstream
-from posefix.pipeline.demo import POSES
-from posefix.pipeline.meshes import write_mesh
+from posefix.workflow.demo import POSES
+from posefix.io.meshes import write_mesh
 
 pytestmark = pytest.mark.pipeline
 
@@ -49,7 +49,7 @@ def test_demo_run_produces_every_artifact(demo_run):
 def test_demo_poses_are_repaired(demo_run):
     """S0's promise on the demo library: no new intersection, untouched regions reproduced."""
     import json
-    from posefix.pipeline.meshes import read_mesh
+    from posefix.io.meshes import read_mesh
     summary = json.loads((demo_run / "reports" / "demo" / "summary.json").read_text())
     assert [e["pose"] for e in summary["poses"]] == [p.name for p in POSES]
     for e in summary["poses"]:
@@ -87,7 +87,7 @@ def test_the_report_compares_s0_with_the_baseline_repairs(demo_run, name):
     S0's; renders.png has a panel per baseline."""
     import json
     from matplotlib.image import imread
-    from posefix.pipeline.timings import benchmark_seconds
+    from posefix.workflow.timings import benchmark_seconds
     from posefix.repair.deviation import deviation
     summary = json.loads((demo_run / "reports" / "demo" / "summary.json").read_text())
     for e in summary["poses"]:
@@ -237,7 +237,7 @@ def _check_repaired_library(work, lib, name):
     within 1e-3 d on average and 5e-3 d at most; new intersecting faces only inside regions copied
     from the target where key frames pass through each other (issue 4's acceptance)."""
     import json
-    from posefix.pipeline.meshes import read_mesh
+    from posefix.io.meshes import read_mesh
     summary = json.loads((work / "reports" / name / "summary.json").read_text())
     for e in summary["poses"]:
         source = next(lib.glob(f"{e['pose']}.*"))
@@ -304,7 +304,7 @@ def test_animate_a_library_from_the_demo_markers_and_repair_it(tmp_path):
     """`snakemake animate_volumetric` (S4 §3.2: 8 markers, 13 frames of the demo limb bending) gives a pose
     library of the reference's faces and vertex order that the repair workflow reads."""
     import json
-    from posefix.pipeline.meshes import read_mesh
+    from posefix.io.meshes import read_mesh
     proc = snakemake(tmp_path, "animate_volumetric", "--config", "volumetric_animate={'tet_vertices': 400}")
     assert proc.returncode == 0, proc.stderr[-3000:]
     library = tmp_path / "data" / "authored" / "demo-limb-markers"

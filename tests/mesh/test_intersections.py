@@ -9,7 +9,7 @@ from conftest import icosphere, shared_library
 from posefix.mesh.intersections import (intersecting_faces, self_intersecting_pairs, triangle_pairs_intersect,
                                         triangles_intersect_exact)
 from posefix.mesh.primitives import capsule
-from posefix.pipeline.meshes import read_mesh
+from posefix.io.meshes import read_mesh
 
 
 def _pairs(V, F):

@@ -5,7 +5,7 @@ import pytest
 
 from posefix.mesh.geometry import bbox_diagonal
 from posefix.mesh.rotations import rotation_exp
-from posefix.pipeline import demo
+from posefix.workflow import demo
 from posefix.skeletal.authoring import VARIANTS, SkeletalPoser, union_error
 from posefix.skeletal.rig import Rig, RigPose
 from posefix.skeletal.skeletal_mesh import skeletal_mesh

@@ -7,8 +7,8 @@ import pytest
 from conftest import run_stage
 from posefix.mesh.geometry import bbox_diagonal
 from posefix.mesh.rotations import rotation_exp
-from posefix.pipeline import demo
-from posefix.pipeline.meshes import read_mesh, write_mesh
+from posefix.workflow import demo
+from posefix.io.meshes import read_mesh, write_mesh
 from posefix.skeletal.flow import MedialBallFlow
 from posefix.skeletal.repair import MedialRepair, medial_repair
 from posefix.skeletal.skeletal_mesh import skeletal_mesh

@@ -4,8 +4,8 @@ import numpy as np
 
 from conftest import ROOT
 from posefix.mesh.rotations import rotation_exp
-from posefix.pipeline import demo
-from posefix.pipeline.rigs import read_rig
+from posefix.workflow import demo
+from posefix.skeletal.rig_files import read_rig
 from posefix.skeletal.rig import (Rig, RigPose, blend_skin, blended_linear_maps, bone_distances, bone_transforms,
                                   pose_from_rotation_vectors, skinning_weights)
 

@@ -8,7 +8,7 @@ from conftest import icosphere, shared_library
 from posefix.mesh.laplacian import uniform_laplacian
 from posefix.mesh.primitives import capsule
 from posefix.mesh.topology import vertex_adjacency
-from posefix.pipeline.meshes import read_mesh
+from posefix.io.meshes import read_mesh
 from posefix.skeletal.skeletal_mesh import (POLE, RAY, SHRINKING_BALL, SkeletalMesh, gated_bilaplacian_flow,
                                             ray_centres, skeletal_mesh)
 

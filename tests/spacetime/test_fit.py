@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from conftest import ROOT, run_stage, smooth_field_problem
-from posefix.pipeline.artifacts import write_artifact
+from posefix.io.artifacts import write_artifact
 from posefix.spacetime.fit import (FitSettings, _diameter_pair, farthest_points, iterate, resume_fit, start_fit,
                                    truncate_history)
 

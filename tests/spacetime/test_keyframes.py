@@ -8,7 +8,7 @@ from posefix.mesh.geometry import bbox_diagonal, edge_lengths
 from posefix.mesh.intersections import intersecting_faces, self_intersecting_pairs
 from posefix.mesh.rotations import rotation_exp
 from posefix.mesh.topology import edges
-from posefix.pipeline.meshes import read_mesh
+from posefix.io.meshes import read_mesh
 from posefix.spacetime.keyframes import deformation_gradients, keyframes
 
 

@@ -6,8 +6,8 @@ import pytest
 
 from conftest import ROOT, run_stage
 from posefix.mesh.rotations import rotation_exp
-from posefix.pipeline.marker_tracks import MarkerTracks, read_tracks, write_tracks_csv
-from posefix.pipeline.meshes import read_mesh, write_mesh
+from posefix.io.marker_tracks import MarkerTracks, read_tracks, write_tracks_csv
+from posefix.io.meshes import read_mesh, write_mesh
 from posefix.volumetric.markers import MarkerAnimator
 from posefix.volumetric.shapes import tet_grid
 from posefix.volumetric.transfer import boundary_faces

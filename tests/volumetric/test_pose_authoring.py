@@ -6,10 +6,10 @@ import pytest
 
 from conftest import run_stage
 from posefix.mesh.intersections import intersecting_faces, self_intersecting_pairs
-from posefix.pipeline import demo
-from posefix.pipeline.errors import InputError
-from posefix.pipeline.meshes import read_mesh, write_mesh
-from posefix.pipeline.pose_scripts import read_pose_script
+from posefix.workflow import demo
+from posefix.io.errors import InputError
+from posefix.io.meshes import read_mesh, write_mesh
+from posefix.io.pose_scripts import read_pose_script
 from posefix.volumetric.authoring import VolumetricPoser, region_tets
 from posefix.volumetric.shapes import tet_grid
 

@@ -36,7 +36,7 @@ def test_the_tets_fill_the_surface_s_volume(limb):
 
 def test_the_lion_reference_with_its_self_intersections_gets_the_same_tets_twice():
     from conftest import shared_library
-    from posefix.pipeline.meshes import read_mesh
+    from posefix.io.meshes import read_mesh
     V, F = read_mesh(shared_library("lion-poses") / "lion-reference.obj")
     X, T = tet_mesh(V, F)
     X2, T2 = tet_mesh(V, F)

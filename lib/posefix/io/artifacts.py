@@ -1,0 +1,137 @@
+"""HDF5 stage artifacts: atomic writing, provenance attributes, validated reading.
+
+Every artifact (``results/<library>/<pose>/<stage>.h5``) carries root attributes
+
+* ``stage``: the stage that wrote it, ``posefix_version``;
+* ``config_sha256``: sha256 of the stage's parameters as canonical JSON (:func:`config_hash`);
+* ``inputs_sha256``: sha256 over the sha256 of its input files, in order (:func:`inputs_hash`);
+* ``inputs``: the input paths as given, JSON list;
+
+a group ``timings`` whose attributes are wall seconds per sub-step, and a group ``metrics`` whose
+attributes are scalar results. Datasets carry ``units`` and ``description`` attributes; the full
+list per stage is in ``docs/artifacts.md``.
+"""
+
+import hashlib
+import json
+
+import h5py
+import numpy as np
+
+from posefix import __version__
+from posefix.io.errors import InputError
+from posefix.io.files import atomic_path, file_sha256
+
+_COMPRESS_BYTES = 1 << 20
+
+
+def config_hash(params):
+    """sha256 of a JSON-serializable parameter dict, independent of key order."""
+    return hashlib.sha256(json.dumps(params, sort_keys=True, default=str).encode()).hexdigest()
+
+
+def inputs_hash(paths):
+    """sha256 over the sha256 of each file's bytes, in the given order (names do not enter)."""
+    return hashlib.sha256("".join(file_sha256(p) for p in paths).encode()).hexdigest()
+
+
+def write_artifact(path, stage, datasets, *, params, inputs, timings, metrics=None, docs=None):
+    """Write one stage artifact atomically.
+
+    Parameters
+    ----------
+    path : str or Path
+    stage : str
+    datasets : dict of str -> array_like
+        Names may contain ``/`` to create groups.
+    params : dict
+        The stage's parameters (hashed into ``config_sha256`` and stored as JSON).
+    inputs : list of str
+        Input files (hashed into ``inputs_sha256``).
+    timings : dict of str -> float
+        Wall seconds per sub-step.
+    metrics : dict of str -> scalar, optional
+    docs : dict of str -> (units, description), optional
+        Per-dataset attributes.
+    """
+    docs = docs or {}
+    with atomic_path(path) as tmp, h5py.File(tmp, "w") as fh:
+        fh.attrs["stage"] = stage
+        fh.attrs["posefix_version"] = __version__
+        fh.attrs["config_sha256"] = config_hash(params)
+        fh.attrs["config"] = json.dumps(params, sort_keys=True, default=str)
+        fh.attrs["inputs_sha256"] = inputs_hash(inputs)
+        fh.attrs["inputs"] = json.dumps([str(p) for p in inputs])
+        for name, value in datasets.items():
+            value = np.asarray(value)
+            if value.dtype.kind == "U":  # text: variable-length UTF-8
+                ds = fh.create_dataset(name, data=value.astype(object), dtype=h5py.string_dtype())
+            else:
+                big = value.nbytes >= _COMPRESS_BYTES
+                ds = fh.create_dataset(name, data=value, compression="gzip" if big else None,
+                                       compression_opts=1 if big else None, shuffle=big)
+            if name in docs:
+                ds.attrs["units"], ds.attrs["description"] = docs[name]
+        group = fh.create_group("timings")
+        for key, seconds in timings.items():
+            group.attrs[key] = float(seconds)
+        group = fh.create_group("metrics")
+        for key, value in (metrics or {}).items():
+            group.attrs[key] = value
+
+
+def read_artifact(path, stage, names):
+    """Read datasets from a stage artifact, checking that it is one.
+
+    Parameters
+    ----------
+    path : str or Path
+    stage : str
+        Expected value of the ``stage`` attribute.
+    names : list of str
+        Datasets to load into memory.
+
+    Returns
+    -------
+    data : dict of str -> ndarray
+    attrs : dict
+        Root attributes plus ``metrics`` (dict).
+
+    Raises
+    ------
+    InputError
+        Missing or unreadable file, another stage's artifact, or a missing dataset.
+    """
+    try:
+        with h5py.File(path, "r") as fh:
+            found = fh.attrs.get("stage")
+            if found != stage:
+                raise InputError(path, f"not a '{stage}' artifact (stage attribute: {found!r})")
+            missing = [n for n in names if n not in fh]
+            if missing:
+                raise InputError(path, f"missing dataset(s): {', '.join(missing)}")
+            data = {n: fh[n][()] for n in names}
+            attrs = dict(fh.attrs)
+            attrs["metrics"] = dict(fh["metrics"].attrs) if "metrics" in fh else {}
+            return data, attrs
+    except OSError as exc:
+        raise InputError(path, f"cannot be read as HDF5: {str(exc).splitlines()[0]}") from None
+
+
+def read_baseline(path, name, names):
+    """:func:`read_artifact` of the artifact of baseline repair ``name`` (written by stage ``repair_<name>``).
+
+    Parameters
+    ----------
+    path : str or Path
+    name : str
+        The baseline, e.g. ``medial`` (stage ``repair_medial``, ``results/<library>/<pose>/medial.h5``).
+    names : list of str
+        Datasets to load into memory.
+
+    Returns
+    -------
+    data : dict of str -> ndarray
+    attrs : dict
+    """
+    return read_artifact(path, f"repair_{name}", names)

@@ -1,0 +1,217 @@
+"""Pose libraries on disk: discovery of the reference and the poses, and their validation.
+
+A pose library is a folder of triangle meshes (:mod:`posefix.io.meshes`) that share one
+face array. Every problem is raised as :class:`~posefix.io.errors.InputError` naming the
+file (or folder) and the problem in one line.
+"""
+
+import os
+import re
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from posefix.mesh.geometry import bbox_diagonal, edge_lengths, face_areas
+from posefix.mesh.topology import edges
+from posefix.mesh.weld import Weld
+from posefix.io.errors import InputError
+from posefix.io.meshes import MESH_SUFFIXES, MeshFile, mesh_file, read_mesh
+
+DEGENERATE_AREA_REL = 1e-14
+SEAM_APART_REL = 1e-3
+"""Vertices split along a seam in the reference must stay within this times its mean edge length in a pose."""
+"""Reference faces with area below this times the squared bbox diagonal count as zero-area."""
+
+
+MIN_REFERENCE_VERTICES = 15
+"""Fewest vertices of a usable reference: the terms of the space-time method's quadratic space-time polynomial
+(``posefix.spacetime.rbf.POLY_TERMS``; the I/O layer imports no method, a test checks that they agree)."""
+
+
+@dataclass(frozen=True)
+class Library:
+    """A pose library: one reference and the target poses to repair, in name order."""
+
+    folder: str
+    name: str
+    reference: MeshFile
+    poses: tuple
+
+    def pose(self, name):
+        """The :class:`~posefix.io.meshes.MeshFile` of the pose called ``name``."""
+        for p in self.poses:
+            if p.name == name:
+                return p
+        raise KeyError(name)
+
+
+def discover_library(folder, reference=None, poses=None, name=None):
+    """Find the reference and target poses in a folder (hidden files, e.g. macOS ``._*``, and sub-folders,
+    e.g. ``__MACOSX/``, are not read).
+
+    Parameters
+    ----------
+    folder : str or Path
+    reference : str, optional
+        File name or pose name of the reference; default: the one mesh whose name ends in
+        ``reference`` (e.g. ``lion-reference.obj``).
+    poses : list of str, optional
+        Names (or file names) of the target poses to use; default: every other mesh.
+    name : str, optional
+        Library name; default: the folder's name.
+
+    Raises
+    ------
+    InputError
+        Missing folder, no meshes, no or several reference candidates, unknown names,
+        two files with the same pose name, or no target pose.
+    """
+    folder = Path(folder)
+    if not folder.is_dir():
+        raise InputError(folder, "not a folder")
+    files = [mesh_file(p) for p in sorted(folder.iterdir())
+             if (p.is_file() or p.is_symlink()) and not p.name.startswith(".")]  # hidden: ._x.obj (macOS), ...
+    files = [f for f in files if f is not None]
+    if not files:
+        raise InputError(folder, f"no mesh files {MESH_SUFFIXES}")
+    by_name = {}
+    for f in files:
+        if f.name in by_name:
+            raise InputError(f.path, f"same pose name '{f.name}' as {os.path.basename(by_name[f.name].path)}")
+        by_name[f.name] = f
+    ref = _pick_reference(folder, files, by_name, reference)
+    if poses:
+        missing = [p for p in poses if _lookup(by_name, p) is None]
+        if missing:
+            raise InputError(folder, f"pose(s) not found: {', '.join(missing)}")
+        chosen = [_lookup(by_name, p) for p in poses]
+    else:
+        chosen = files
+    chosen = tuple(sorted({f.name: f for f in chosen if f.name != ref.name}.values(), key=lambda f: f.name))
+    if not chosen:
+        raise InputError(folder, "no target poses besides the reference")
+    return Library(folder=str(folder), name=name or folder.resolve().name, reference=ref, poses=chosen)
+
+
+def _lookup(by_name, key):
+    return by_name.get(key) or next((f for f in by_name.values() if os.path.basename(f.path) == key), None)
+
+
+def _pick_reference(folder, files, by_name, reference):
+    if reference:
+        ref = _lookup(by_name, reference)
+        if ref is None:
+            raise InputError(folder, f"reference '{reference}' not found")
+        return ref
+    candidates = [f for f in files if f.name.lower().endswith("reference")]
+    if not candidates:
+        raise InputError(folder, "no reference found: no mesh name ends in 'reference'; "
+                                 "set 'reference' in the config")
+    if len(candidates) > 1:
+        names = ", ".join(os.path.basename(f.path) for f in candidates)
+        raise InputError(folder, f"several reference candidates ({names}); set 'reference' in the config")
+    return candidates[0]
+
+
+def check_reference(path, V, F):
+    """Raise :class:`InputError` when the reference is too small for the space-time fit (fewer than
+    :data:`MIN_REFERENCE_VERTICES` vertices) or has degenerate or zero-area faces."""
+    if len(V) < MIN_REFERENCE_VERTICES:
+        raise InputError(path, f"reference has {len(V)} vertices: the repair needs at least "
+                               f"{MIN_REFERENCE_VERTICES} (the terms of the fit's quadratic space-time polynomial)")
+    repeated = (F[:, 0] == F[:, 1]) | (F[:, 1] == F[:, 2]) | (F[:, 2] == F[:, 0])
+    if repeated.any():
+        f = int(np.argmax(repeated))
+        raise InputError(path, f"reference has {repeated.sum()} degenerate faces repeating a vertex (first: face {f} {F[f].tolist()})")
+    d = bbox_diagonal(V)
+    tiny = face_areas(V, F) <= DEGENERATE_AREA_REL * d * d
+    if tiny.any():
+        f = int(np.argmax(tiny))
+        raise InputError(path, f"reference has {tiny.sum()} zero-area faces (first: face {f})")
+
+
+def check_pose(path, V, F, V_ref, F_ref):
+    """Raise :class:`InputError` unless a pose matches the reference's vertex count and faces."""
+    if len(V) != len(V_ref):
+        raise InputError(path, f"{len(V)} vertices, the reference has {len(V_ref)}")
+    if F.shape != F_ref.shape:
+        raise InputError(path, f"{len(F)} faces, the reference has {len(F_ref)}")
+    differ = np.any(F != F_ref, axis=1)
+    if differ.any():
+        f = int(np.argmax(differ))
+        raise InputError(path, f"face array differs from the reference ({differ.sum()} faces; first: face {f} "
+                               f"{F[f].tolist()} vs {F_ref[f].tolist()})")
+
+
+def read_reference(path):
+    """Read and validate a reference mesh: (V (n, 3) float64, F (m, 3) int64)."""
+    V, F = read_mesh(path)
+    check_reference(path, V, F)
+    return V, F
+
+
+def read_pose(path, V_ref, F_ref):
+    """Read a target pose and check it against the reference; returns its (n, 3) vertices."""
+    V, F = read_mesh(path)
+    check_pose(path, V, F, V_ref, F_ref)
+    return V
+
+
+def read_pose_pair(reference_path, target_path):
+    """Read and validate a reference and one target pose.
+
+    Returns
+    -------
+    V_ref, V_tgt : (n, 3) float64
+    F : (m, 3) int64
+    """
+    V_ref, F = read_reference(reference_path)
+    return V_ref, read_pose(target_path, V_ref, F), F
+
+
+def check_seams(path, weld, X, V_ref, F):
+    """Raise :class:`InputError` when vertices that coincide in the reference (``weld``) are apart in the
+    pose ``X`` (n, 3): the pose splits the mesh where the reference does not."""
+    tol = SEAM_APART_REL * float(edge_lengths(V_ref, edges(F)).mean())
+    apart = weld.apart(X, tol)
+    if len(apart):
+        a, b = apart[0]
+        raise InputError(path, f"vertices {a} and {b} coincide in the reference (a seam) but are "
+                               f"{np.linalg.norm(X[a] - X[b]):.3g} apart here ({len(apart)} such vertices)")
+
+
+def read_welded_reference(path):
+    """The reference with its split vertices welded (:class:`~posefix.mesh.weld.Weld`): (V (k, 3), F (m, 3),
+    weld); a mesh without seams comes back unchanged (``k == n``)."""
+    V, F = read_reference(path)
+    weld = Weld.of(V, F)
+    return weld.weld(V), weld.faces(F), weld
+
+
+def read_welded_pair(reference_path, target_path):
+    """Reference and target with the reference's split vertices welded: (V_ref (k, 3), V_tgt (k, 3),
+    F (m, 3), weld); :class:`InputError` naming the target when a seam of the reference opens in it."""
+    V_ref, V_tgt, F = read_pose_pair(reference_path, target_path)
+    weld = Weld.of(V_ref, F)
+    check_seams(target_path, weld, V_tgt, V_ref, F)
+    return weld.weld(V_ref), weld.weld(V_tgt), weld.faces(F), weld
+
+
+def read_vertex_ids(path):
+    """Read vertex ids from a text file: integers separated by whitespace or commas, ``#`` comments.
+
+    Returns
+    -------
+    (k,) int64
+    """
+    try:
+        with open(path) as fh:
+            text = re.sub(r"#[^\n]*", "", fh.read())
+    except OSError as exc:
+        raise InputError(path, f"cannot be opened: {exc.strerror or exc}") from None
+    tokens = text.replace(",", " ").split()
+    bad = [t for t in tokens if not re.fullmatch(r"\d+", t)]
+    if bad:
+        raise InputError(path, f"not a vertex id: {bad[0]!r} (expected non-negative integers)")
+    return np.array([int(t) for t in tokens], dtype=np.int64)

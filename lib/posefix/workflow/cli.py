@@ -1,0 +1,182 @@
+"""Plumbing shared by the stage scripts in ``stages/``: arguments, logging, errors, threads.
+
+A stage script defines ``main(args, log)`` and ends with ``run_stage(parser, main)``. Input
+problems (:class:`posefix.io.errors.InputError`) end the stage with one line on stderr and
+exit code 2, file-system errors (``OSError``) with one line and exit code 1; an interrupted stage
+exits 130. Outputs are written atomically by the stages, so neither leaves a partial file behind.
+
+Logging is configured here, once per stage process, on the ``posefix`` logger: INFO and above on
+stderr, everything (DEBUG too) in the ``--log`` file. Library modules log through
+``logging.getLogger(__name__)`` and so reach both; the stage itself gets ``posefix.stages.<stage>``.
+"""
+
+import argparse
+import inspect
+import logging
+import os
+import shlex
+import signal
+import sys
+import time
+from pathlib import Path
+
+from threadpoolctl import threadpool_limits
+
+from posefix.io.errors import InputError
+
+EXIT_INPUT_ERROR = 2
+
+
+def stage_parser(stage, description):
+    """An ``argparse`` parser with the options every stage has: ``--threads``, ``--log``."""
+    parser = argparse.ArgumentParser(prog=f"{stage}.py", description=description,
+                                     formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    parser.set_defaults(stage=stage)
+    parser.add_argument("--threads", type=int, default=1,
+                        help="maximum BLAS/OpenMP/OpenCL threads this stage may use")
+    parser.add_argument("--log", default=None, help="also append the log to this file")
+    return parser
+
+
+def run_stage(parser, main, argv=None):
+    """Parse arguments, set up logging and thread limits, run ``main(args, log)``, map errors."""
+    args = parser.parse_args(argv)
+    signal.signal(signal.SIGINT, signal.default_int_handler)  # from here KeyboardInterrupt, handled below
+    log = configure_logging(args.stage, args.log)
+    start = time.perf_counter()
+    try:
+        with threadpool_limits(limits=max(1, args.threads)):
+            main(args, log)
+    except InputError as exc:
+        log.debug("input error", exc_info=True)
+        print(f"posefix {args.stage}: error: {exc}", file=sys.stderr)
+        sys.exit(EXIT_INPUT_ERROR)
+    except OSError as exc:  # e.g. an output folder that cannot be created or written
+        log.debug("system error", exc_info=True)
+        where = f"{exc.filename}: " if exc.filename else ""
+        print(f"posefix {args.stage}: error: {where}{exc.strerror or exc}", file=sys.stderr)
+        sys.exit(1)
+    except KeyboardInterrupt:
+        print(f"posefix {args.stage}: interrupted; no output written", file=sys.stderr)
+        sys.exit(130)
+    except Exception:  # a bug: the traceback to stderr (Python's) and to the log file
+        log.debug("unexpected error", exc_info=True)
+        raise
+    log.info("done in %.2f s", time.perf_counter() - start)
+
+
+def configure_logging(stage, path=None):
+    """Send the ``posefix`` loggers to stderr (INFO) and to ``path`` (DEBUG); the stage's own logger.
+
+    Parameters
+    ----------
+    stage : str
+        Stage name, in every line (``HH:MM:SS posefix <stage>: message``).
+    path : str, optional
+        Log file, rewritten.
+
+    Returns
+    -------
+    logging.Logger
+        ``posefix.stages.<stage>``.
+    """
+    root = logging.getLogger("posefix")
+    root.setLevel(logging.DEBUG)
+    root.handlers.clear()
+    root.propagate = False
+    fmt = logging.Formatter(f"%(asctime)s posefix {stage}: %(message)s", datefmt="%H:%M:%S")
+    console = logging.StreamHandler(sys.stderr)
+    console.setLevel(logging.INFO)
+    console.setFormatter(fmt)
+    root.addHandler(console)
+    if path:
+        handler = logging.FileHandler(path, mode="w")
+        handler.setLevel(logging.DEBUG)
+        handler.setFormatter(fmt)
+        root.addHandler(handler)
+    return logging.getLogger(f"posefix.stages.{stage}")
+
+
+def library_defaults(obj):
+    """Parameter name -> default of a function, or of a (data)class's constructor; parameters without one left out.
+
+    Stages take their argparse defaults from here, so that they are the library's (which
+    ``tests/test_defaults.py`` compares with config.yaml).
+    """
+    return {name: p.default for name, p in inspect.signature(obj).parameters.items() if p.default is not p.empty}
+
+
+def int_list(text):
+    """Parse ``"1,2, 3"`` into ``[1, 2, 3]`` (argparse type)."""
+    return _number_list(text, int, "integers")
+
+
+def float_list(text):
+    """Parse ``"0.5,1"`` into ``[0.5, 1.0]`` (argparse type)."""
+    return _number_list(text, float, "numbers")
+
+
+def _number_list(text, kind, name):
+    try:
+        return [kind(x) for x in text.replace(",", " ").split()]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a list of {name}: {text!r}") from None
+
+
+def named_path(text):
+    """Parse ``"medial=results/lib/p/medial.h5"`` into ``("medial", "results/lib/p/medial.h5")`` (argparse type)."""
+    name, sep, path = text.partition("=")
+    if not (sep and name and path):
+        raise argparse.ArgumentTypeError(f"not NAME=PATH: {text!r}")
+    return name, path
+
+
+def config_flags(section, skip=("threads",)):
+    """A stage's command-line options from its config section (the one way the rules turn config into flags).
+
+    ``key: value`` becomes ``--key-name value``; a boolean ``--key-name`` or ``--no-key-name``; a list its
+    items joined by commas (:func:`int_list`, :func:`float_list`); None is left out (the stage's default). Keys
+    of ``skip`` are not options (threads are the rule's).
+
+    Parameters
+    ----------
+    section : dict
+        The config section, e.g. ``config["keyframes"]``.
+    skip : sequence of str
+
+    Returns
+    -------
+    str
+        Shell-quoted options.
+
+    Examples
+    --------
+    >>> config_flags({"count": 11, "align": False, "alphas": [0.5, 1.0], "device": "auto", "threads": 2})
+    '--count 11 --no-align --alphas 0.5,1.0 --device auto'
+    """
+    flags = []
+    for key, value in section.items():
+        name = "--" + key.replace("_", "-")
+        if key in skip or value is None:
+            continue
+        if isinstance(value, bool):
+            flags.append(name if value else "--no-" + name[2:])
+        elif isinstance(value, (list, tuple)):
+            flags += [name, shlex.quote(",".join(map(str, value)))]
+        elif isinstance(value, dict):
+            raise TypeError(f"{key}: a dict is no command-line option; skip it and pass it otherwise")
+        else:
+            flags += [name, shlex.quote(str(value))]
+    return " ".join(flags)
+
+
+def put_interpreter_first_on_path():
+    """Put the folder of the running interpreter first on ``PATH`` (the workflow's rules call ``python``: the
+    interpreter that runs Snakemake, e.g. a venv's, unless a conda environment of the rule comes first)."""
+    os.environ["PATH"] = os.pathsep.join([str(Path(sys.executable).parent), os.environ.get("PATH", "")])
+
+
+def named_options(option, paths):
+    """Shell-quoted command-line options ``<option> <name>=<path>`` for ``paths`` {name: path}, str (what
+    :func:`named_path` parses; the rules pass the baseline artifacts to the stages with it)."""
+    return " ".join(f"{option} {shlex.quote(f'{name}={path}')}" for name, path in paths.items())

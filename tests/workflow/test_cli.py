@@ -1,0 +1,104 @@
+"""Stage command lines: common options, number lists, logging to stderr and the log file, exit codes."""
+
+import argparse
+import logging
+
+import pytest
+
+from posefix.workflow.cli import (config_flags, configure_logging, float_list, int_list, named_options, named_path,
+                                 run_stage, stage_parser)
+from posefix.io.errors import InputError
+
+
+def test_number_lists():
+    assert int_list("1,2, 3") == [1, 2, 3] and float_list("0.5 1") == [0.5, 1.0]
+    with pytest.raises(argparse.ArgumentTypeError, match="not a list of integers"):
+        int_list("1,x")
+
+
+def test_named_paths():
+    assert named_path("medial=results/a=b/medial.h5") == ("medial", "results/a=b/medial.h5")
+    for bad in ("medial", "=x.h5", "medial="):
+        with pytest.raises(argparse.ArgumentTypeError, match="not NAME=PATH"):
+            named_path(bad)
+
+
+def test_named_options_are_what_named_path_parses():
+    import shlex
+    paths = {"medial": "results/my lib/p 1/medial.h5", "other": "o.h5"}
+    words = shlex.split(named_options("--baseline", paths))
+    assert words[::2] == ["--baseline"] * 2 and dict(map(named_path, words[1::2])) == paths
+    assert named_options("--baseline", {}) == ""
+
+
+@pytest.fixture
+def posefix_logger():
+    """The ``posefix`` logger as it was before the test (configure_logging changes it for the process)."""
+    root = logging.getLogger("posefix")
+    saved = root.handlers[:], root.level, root.propagate
+    yield root
+    for handler in root.handlers:
+        handler.close()
+    root.handlers[:], root.level, root.propagate = saved[0], saved[1], saved[2]
+
+
+def test_library_loggers_reach_the_stage_log_file(tmp_path, capsys, posefix_logger):
+    log = configure_logging("demo", tmp_path / "demo.log")
+    logging.getLogger("posefix.repair.sequence").info("from the library")
+    logging.getLogger("posefix.check.gauss_newton").debug("detail")
+    log.info("from the stage")
+    for handler in posefix_logger.handlers:
+        handler.flush()
+    text = (tmp_path / "demo.log").read_text()
+    assert "posefix demo: from the library" in text and "posefix demo: detail" in text
+    err = capsys.readouterr().err
+    assert "from the stage" in err and "detail" not in err  # DEBUG only in the file
+    assert log.name == "posefix.stages.demo"
+
+
+def _run(main, argv=()):
+    parser = stage_parser("demo", "a test stage")
+    with pytest.raises(SystemExit) as exit_info:
+        run_stage(parser, main, list(argv))
+    return exit_info.value.code
+
+
+def test_errors_become_one_line_and_an_exit_code(capsys, posefix_logger):
+    def bad_input(args, log):
+        raise InputError("a.obj", "no faces")
+
+    def no_disk(args, log):
+        raise OSError(28, "No space left on device", "out.h5")
+
+    assert _run(bad_input) == 2 and capsys.readouterr().err.strip().endswith("posefix demo: error: a.obj: no faces")
+    assert _run(no_disk) == 1 and "error: out.h5: No space left on device" in capsys.readouterr().err
+    assert stage_parser("demo", "").parse_args([]).threads == 1
+
+
+def test_config_flags_are_what_the_stage_parsers_read():
+    parser = argparse.ArgumentParser()
+    parser.add_argument("--count", type=int)
+    parser.add_argument("--align", action=argparse.BooleanOptionalAction, default=True)
+    parser.add_argument("--alphas", type=float_list)
+    parser.add_argument("--tracks")
+    section = {"count": 11, "align": False, "alphas": [0.5, 1.0], "tracks": "my tracks.csv", "vec": None,
+               "threads": 2}
+    import shlex
+    args = parser.parse_args(shlex.split(config_flags(section, skip=("threads", "vec"))))
+    assert (args.count, args.align, args.alphas, args.tracks) == (11, False, [0.5, 1.0], "my tracks.csv")
+    assert "--vec" not in config_flags(section) and "--threads" not in config_flags(section)
+    with pytest.raises(TypeError, match="exclude: a dict"):
+        config_flags({"exclude": {}})
+
+
+def test_an_unexpected_error_reaches_the_log_file(tmp_path, capsys, posefix_logger):
+    def bug(args, log):
+        raise ZeroDivisionError("a bug")
+
+    parser = stage_parser("demo", "a test stage")
+    with pytest.raises(ZeroDivisionError):
+        run_stage(parser, bug, ["--log", str(tmp_path / "demo.log")])
+    for handler in posefix_logger.handlers:
+        handler.flush()
+    text = (tmp_path / "demo.log").read_text()
+    assert "unexpected error" in text and "ZeroDivisionError: a bug" in text

@@ -1,0 +1,31 @@
+"""Config problems: one line each, naming the key path and what is allowed; unknown keys with a suggestion."""
+
+import copy
+
+import yaml
+
+from conftest import ROOT
+from posefix.workflow.config_check import config_problems
+
+SCHEMA = yaml.safe_load((ROOT / "schemas" / "config.schema.yaml").read_text())
+CONFIG = yaml.safe_load((ROOT / "config.yaml").read_text())
+
+
+def test_the_shipped_config_has_no_problem():
+    assert config_problems(CONFIG, SCHEMA) == []
+
+
+def test_every_problem_is_one_line_naming_its_key():
+    config = copy.deepcopy(CONFIG)
+    config["keyframes"]["count"] = 1
+    config["integrate"]["device"] = "tpu"
+    config["fit"]["max_centres"] = 3
+    config["keyframs"] = {}
+    config["baselines"] = ["medial", "volumetrc"]
+    assert config_problems(config, SCHEMA) == [
+        "baselines.1: 'volumetrc' is not one of 'medial', 'volumetric', 'contact'",
+        "fit.max_centres: unknown key (did you mean 'max_centers'?)",
+        "integrate.device: 'tpu' is not one of 'auto', 'cpu', 'gpu', 'numpy'",
+        "keyframes.count: 1 is less than the minimum of 2",
+        "keyframs: unknown key (did you mean 'keyframes'?)",
+    ]
