@@ -50,9 +50,10 @@ def build_parser():
     parser.add_argument("--finish", choices=["contact", "snap"], default=defaults.finish,
                         help="contact: the contact solver moves V_C onto its targets, no new intersection can form; "
                         "snap: snap V_C, fall back to the target and untangle")
-    parser.add_argument("--free-goal", choices=["target", "integrated"], default=finish.free_goal,
-                        help="contact finish: goal of the free region (the target, or the integrated pose plus the "
-                        "blended V_C residual)")
+    parser.add_argument("--free-goal", choices=["blend", "target", "integrated"], default=finish.free_goal,
+                        help="contact finish: goal of the free region: blend (the target's positions with the "
+                        "integrated pose's shape below the smoothing length), target, or integrated (the integrated "
+                        "pose plus the blended V_C residual)")
     parser.add_argument("--constrained-weight", type=float, default=finish.constrained_weight,
                         help="contact finish: weight of V_C on its targets relative to the free region's")
     parser.add_argument("--untangle-rings", type=int, default=finish.untangle_rings,

@@ -44,6 +44,21 @@ def test_a_rigid_motion_of_the_goals_comes_back_exactly():
     assert np.abs(r.X - goal).max() < 1e-12
 
 
+def test_a_shape_for_the_smoothness_term_follows_the_goals_above_the_smoothing_length_and_the_shape_below_it():
+    V, F = sphere([0, 0, 0], subdivisions=3)
+    bumps = 0.02 * np.sin(25 * V[:, [0]]) * V  # fine detail of the goals: a wavelength of 0.25, below l = 0.35
+    goal, shape = 1.5 * V + bumps, V + [0.0, 0.0, 0.5]
+    solver = ContactSolver(V, F, settings=ContactSettings(smoothing=0.1))
+    r = solver.compute_pose(V, goal, np.ones(len(V)), shape=shape)
+    assert r.converged and not r.contact.any()
+    mass, smooth = solver._smoothness  # the minimum of 1/2 |x - goal|_W^2 + 1/2 |x - shape|_S^2: zero gradient
+    assert np.abs(mass[:, None] * (r.X - goal) + smooth @ (r.X - shape)).max() < 1e-9
+    radius = np.linalg.norm(r.X - r.X.mean(axis=0), axis=1)
+    assert abs(radius.mean() - 1.5) < 0.05  # the goals' scale (their coarsest feature) ...
+    assert radius.std() < 0.2 * np.linalg.norm(bumps, axis=1).std()  # ... without their fine bumps
+    assert np.abs(solver.compute_pose(V, goal, np.ones(len(V)), shape=goal).X - goal).max() < 1e-12
+
+
 def test_a_reference_with_its_own_intersections_keeps_them_and_forms_no_new_pair():
     V, F = union(sphere([-0.9, 0, 0]), sphere([0.9, 0, 0]), sphere([0, 2.4, 0], radius=0.8))
     ref_faces = intersecting_faces(self_intersecting_pairs(V, F), len(F))

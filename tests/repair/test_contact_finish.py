@@ -9,6 +9,7 @@ from posefix.mesh.contact_solver import ContactSettings, ContactSolver
 from posefix.mesh.distortion import distortion_summary
 from posefix.mesh.intersections import intersecting_faces, self_intersecting_pairs
 from posefix.mesh.rotations import rotation_exp
+from posefix.repair.contact_finish import FinishSettings
 from posefix.repair.flags import CONTACT, REPLACED_NEW_INTERSECTION, REPRODUCED
 from posefix.repair.sequence import finish_pose, repair_pose
 from posefix.repair.state import RepairProblem
@@ -102,17 +103,21 @@ def test_the_distortion_metric_flags_the_snap_stretching_a_fold_and_not_the_cont
     snap = repair_pose(problem, samples[-1], 1.0, 1e-4, 1.0)  # the fit's error lets the snap reach the tip's target
     flagged = distortion_summary(snap.X, rests, F)
     assert snap.metrics["repaired_new"] == 0 and flagged["faces_over"] > 0 and flagged["edge_target"] > 4.0
-    contact = finish_pose(problem, samples, 1.0, ContactSolver(V, F))
+    contact = finish_pose(problem, samples, 1.0, ContactSolver(V, F))  # free goal: blend
     clean = distortion_summary(contact.X, rests, F)
-    assert contact.metrics["repaired_new"] == 0 and clean["faces_over"] == 0 and clean["edge_target"] < 1.01
+    assert contact.metrics["repaired_new"] == 0 and clean["faces_over"] == 0 and clean["edge_target"] < 1.1
+    target = finish_pose(problem, samples, 1.0, ContactSolver(V, F), FinishSettings(free_goal="target"))
+    exact = distortion_summary(target.X, rests, F)
+    assert target.metrics["repaired_new"] == 0 and exact["faces_over"] == 0 and exact["edge_target"] < 1.01
 
 
 def test_a_finish_that_crushes_the_strip_past_ccd_is_reverted_to_an_intersection_free_sample():
     """Folded at x = 0.35 the tip's target lies beyond the base: with the smallest barrier distance, one straight
-    Newton solve from the flat strip crumples it (zero-area triangles, below CCD's precision), and the result is checked and reverted."""
+    Newton solve from the flat strip toward the target alone (free goal ``target``) crumples it (zero-area
+    triangles, below CCD's precision), and the result is checked and reverted."""
     V, F, problem = _folded_strip(0.35)
     solver = ContactSolver(V, F, settings=ContactSettings(dhat=2e-4, tolerance=1e-4, max_iterations=40))  # crossed by then
-    result = finish_pose(problem, np.stack([V, V]), 1.0, solver)
+    result = finish_pose(problem, np.stack([V, V]), 1.0, solver, FinishSettings(free_goal="target"))
     assert result.metrics["repaired_new"] == 0 and result.metrics["contact_reverted"]
     assert np.array_equal(result.X, V) and not (result.replaced & CONTACT).any()  # the intersection-free sample
 

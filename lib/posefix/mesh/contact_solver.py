@@ -5,12 +5,12 @@ distances below ``dhat`` between non-adjacent primitives (vertex-face and edge-e
 contact open, and a continuous-collision-detection (CCD) bound on every line-search step makes sure no
 step passes through one. Minimized, by Newton's method with the PSD-projected barrier Hessian::
 
-    E(x) = 1/2 sum_i w_i a_i |x_i - g_i|^2 + 1/2 l^4 (x - g)^T L^T M^-1 L (x - g) + kappa B(x)
+    E(x) = 1/2 sum_i w_i a_i |x_i - g_i|^2 + 1/2 l^4 (x - s)^T L^T M^-1 L (x - s) + kappa B(x)
 
-``g``: the goals, ``w``: per-vertex weights, ``a``: vertex areas over their mean, ``L``/``M``: the
-cotangent Laplacian and lumped areas of the reference (so the bi-Laplacian smoothness term spreads a
-contact's push over about the smoothing length ``l``, and a rigid motion of the goals costs nothing),
-``kappa``: IPC's adaptive barrier stiffness.
+``g``: the goals, ``s``: the shape the smoothness term keeps (the goals by default), ``w``: per-vertex
+weights, ``a``: vertex areas over their mean, ``L``/``M``: the cotangent Laplacian and lumped areas of the
+reference (so the bi-Laplacian smoothness term spreads a contact's push over about the smoothing length
+``l``, and a rigid motion of the goals costs nothing), ``kappa``: IPC's adaptive barrier stiffness.
 
 The reference may intersect itself. Its intersecting faces are *tolerated*: a primitive pair whose
 every incident face is tolerated is removed from the broad phase's candidates before the barrier and
@@ -331,7 +331,7 @@ class ContactSolver:
             return sum((self.barrier.gradient(C, self.mesh, X) for C in sets), np.zeros(X.size))
         return sum((self.barrier.hessian(C, self.mesh, X, _PSD) for C in sets), sp.csc_matrix((X.size, X.size)))
 
-    def compute_pose(self, start, goal, weights, tolerance=None):
+    def compute_pose(self, start, goal, weights, tolerance=None, shape=None):
         """Move ``start`` toward ``goal`` without leaving the intersection-free set.
 
         Parameters
@@ -344,6 +344,10 @@ class ContactSolver:
             Per-vertex weights of the goals (positive somewhere on every connected part).
         tolerance : float, optional
             Newton's stopping step / d (``settings.tolerance`` by default; looser for waypoints of a path).
+        shape : (n, 3) float, optional
+            The shape the smoothness term keeps: it smooths the displacement from ``shape`` instead of from
+            ``goal`` (``goal`` by default), so the result follows ``goal`` above the smoothing length and
+            ``shape``'s details below it.
 
         Returns
         -------
@@ -357,6 +361,9 @@ class ContactSolver:
         t0 = time.perf_counter()
         newton = _Newton(self, np.asarray(goal, dtype=np.float64), np.asarray(weights, dtype=np.float64),
                          self.settings.tolerance if tolerance is None else tolerance)
+        if shape is not None:  # 1/2 |x - g|_W^2 + 1/2 |x - s|_S^2 = 1/2 |x - Q^-1 (W g + S s)|_Q^2 + const
+            mass, smooth = self._smoothness
+            newton.goal = newton.system.solve_q((weights * mass)[:, None] * newton.goal + smooth @ shape)
         X, converged, iterations = newton.run(np.array(start, dtype=np.float64))
         C = self.collisions(X)
         return ContactResult(X, converged, iterations, self.contact_vertices(C, len(X)), self.min_distance(X, C),

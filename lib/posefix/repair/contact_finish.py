@@ -5,9 +5,13 @@ toward its goal, through intersection-free shapes only (:mod:`posefix.mesh.conta
    reference; the exact detector). Where key frames pass through each other (S0 Fig. 9) it is not: then the
    start is the latest intersection-free sample of the integrated path lines, carried along the later
    samples by the contact solver, which holds the passing region on its intersection-free side.
-2. **Goal.** ``V_C`` on its targets; the free region on the target (``free_goal: target``, the default: the
-   closest intersection-free shape to what the artist posed), or on the integrated pose plus the ``V_C``
-   residual blended biharmonically into it (``free_goal: integrated``).
+2. **Goal.** ``V_C`` on its targets; the free region toward the target's positions with the integrated
+   pose's shape (``free_goal: blend``, the default: the smoothness term keeps the displacement from the
+   integrated pose, plus the ``V_C`` residual blended biharmonically into it, smooth, so the free region
+   follows the target above the smoothing length and keeps the integrated pose's details below it: the
+   target's crushed and stretched faces are not copied), on the target alone (``target``: the closest
+   intersection-free shape to what the artist posed), or on the integrated pose plus the blended residual
+   (``integrated``).
 3. **Solve** with ``V_C`` weighted ``constrained_weight`` and the free region 1; the barrier keeps every
    new contact open.
 4. **Exact V_C**: constrained vertices of no barrier pair are put exactly on their targets where CCD
@@ -42,9 +46,12 @@ class FinishSettings:
     Attributes
     ----------
     free_goal : str
+        ``blend`` (the target's positions with the integrated pose's shape below the smoothing length),
         ``target`` (the closest intersection-free shape to the pose) or ``integrated`` (the integrated free
-        region plus the blended V_C residual). On the lion poses ``target`` leaves 5-10x less free-region
-        deviation and fewer distorted faces, for 1-3x the Newton iterations.
+        region plus the blended V_C residual). On the cat poses ``target`` copies the target's crushed faces
+        where contacts press on them and the downstream Gauss-Newton check collapses them (cat-01, -02, -04);
+        ``blend`` keeps them open, in a third to two thirds of the Newton iterations, for up to twice the
+        free-region deviation (still below the snap finish's).
     constrained_weight : float
         Weight of ``V_C`` on its targets, relative to the free region's 1.
     untangle_rings : int
@@ -52,7 +59,7 @@ class FinishSettings:
         them: the region then takes the target's positions (cat-09: 7 rings).
     """
 
-    free_goal: str = "target"
+    free_goal: str = "blend"
     constrained_weight: float = 1e6
     untangle_rings: int = 16
 
@@ -106,14 +113,14 @@ def contact_finish(problem, solver, samples, settings=FinishSettings()):
     """
     t0 = time.perf_counter()
     start, label, tracked, iterations = _intersection_free_start(problem, solver, samples)
-    goal = _goal(problem, samples[-1], settings.free_goal)
+    goal, shape = _goal(problem, samples[-1], settings.free_goal)
     locked = _locked_vertices(problem)
     weights = np.where(problem.mask & ~locked, settings.constrained_weight, 1.0)
-    result = solver.compute_pose(start, goal, weights)
+    result = solver.compute_pose(start, goal, weights, shape=shape)
     X, exact = _exact_constrained(problem, solver, result, locked)
     X, exact, untangled = _untangled(problem, X, exact, locked, settings.untangle_rings)
     if (locked & ~exact).any():
-        result, X, exact = _released(problem, solver, result, X, goal, settings.constrained_weight)
+        result, X, exact = _released(problem, solver, result, X, (goal, shape), settings.constrained_weight)
     pairs = self_intersecting_pairs(X, problem.F)
     reverted = bool((intersecting_faces(pairs, len(problem.F)) & ~problem.reference_faces).any())
     if reverted:
@@ -155,13 +162,14 @@ def _intersection_free_start(problem, solver, samples):
 
 
 def _goal(problem, X_int, free_goal):
-    """Goal positions (n, 3): V_C on the target, the free region as ``free_goal`` says."""
+    """``(goal (n, 3), shape (n, 3) or None)``: V_C on the target, the free region as ``free_goal`` says (shape:
+    what the smoothness term keeps, None for the goal itself)."""
     if free_goal == "target":
-        return problem.V_tgt.copy()
+        return problem.V_tgt.copy(), None
     mask = problem.mask
-    goal = X_int + biharmonic_extension(problem.A, problem.V_tgt - X_int, mask, ~mask)
-    goal[mask] = problem.V_tgt[mask]
-    return goal
+    integrated = X_int + biharmonic_extension(problem.A, problem.V_tgt - X_int, mask, ~mask)
+    integrated[mask] = problem.V_tgt[mask]
+    return (problem.V_tgt.copy(), integrated) if free_goal == "blend" else (integrated, None)
 
 
 def _locked_vertices(problem):
@@ -198,12 +206,14 @@ def _untangled(problem, X, exact, locked, most):
     return X, exact, none
 
 
-def _released(problem, solver, result, X, goal, weight):
+def _released(problem, solver, result, X, goals, weight):
     """``(ContactResult, X (n, 3), exact (n,) bool)`` after pulling every constrained vertex with ``weight`` from
-    ``X``: where the target's undoing of the reference's own intersections could not be taken (:func:`_untangled`),
-    the vertices held back by :func:`_locked_vertices` still go as close to their targets as the barrier lets them
-    (lion-08: V_C max 1.7e-3 d held back, 1.7e-4 d released). Iterations and seconds add up."""
-    released = solver.compute_pose(X, goal, np.where(problem.mask, weight, 1.0))
+    ``X`` toward ``goals`` (:func:`_goal`): where the target's undoing of the reference's own intersections could not
+    be taken (:func:`_untangled`), the vertices held back by :func:`_locked_vertices` still go as close to their
+    targets as the barrier lets them (lion-08: V_C max 1.7e-3 d held back, 1.7e-4 d released). Iterations and
+    seconds add up."""
+    goal, shape = goals
+    released = solver.compute_pose(X, goal, np.where(problem.mask, weight, 1.0), shape=shape)
     released.iterations += result.iterations
     released.seconds += result.seconds
     X, exact = _exact_constrained(problem, solver, released, np.zeros(len(X), dtype=bool))
