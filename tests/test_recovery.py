@@ -24,12 +24,13 @@ SHAPES = {"ball-01": [1.2, 1.0, 1.0], "ball-02": [1.0, 1.2, 1.0], "ball-03": [1.
 
 @pytest.fixture
 def checkout(tmp_path):
-    """A copy of the workflow and the package (Snakefile, rules, stages, lib, schemas, config, profiles)."""
+    """A copy of the workflow and the package (Snakefile, rules, the rules' environment, stages, lib, schemas, config,
+    profiles)."""
     copy = tmp_path / "posefix"
     copy.mkdir()
     for name in ("Snakefile", "config.yaml"):
         shutil.copy(ROOT / name, copy / name)
-    for name in ("rules", "stages", "lib", "schemas", "profiles", "poses", "rigs"):
+    for name in ("rules", "envs", "stages", "lib", "schemas", "profiles", "poses", "rigs"):
         shutil.copytree(ROOT / name, copy / name, ignore=shutil.ignore_patterns("__pycache__", "*.egg-info"))
     return copy
 
