@@ -17,9 +17,9 @@ run: $(VENV)/.installed system
 test: $(VENV)/.installed system
 	$(PY) -m pytest $(PYTEST_ARGS)
 
-# The unit tests alone, for your own loop: no end-to-end pipeline, SLURM or ../shared/data tests.
+# The unit tests alone, for your own loop, on $(CORES) processes: no end-to-end pipeline, SLURM or ../shared/data tests.
 test-fast: $(VENV)/.installed system
-	$(PY) -m pytest -m "not pipeline and not cluster and not data" $(PYTEST_ARGS)
+	$(PY) -m pytest -n $(CORES) -m "not pipeline and not cluster and not data" $(PYTEST_ARGS)
 
 bench: $(VENV)/.installed system
 	$(PY) benchmarks/run.py --cores $(CORES)
