@@ -6,8 +6,8 @@
 #   then summary and overview over all poses. Beside S0, per pose, the baseline repairs of config
 #   `baselines` (rules/baselines.smk: medial balls, volumetric fill, contact). `snakemake --report reports/<library>/report.html`
 #   collects the report() outputs (captions in rules/captions/).
-# Beside it, `snakemake author` (rules/skeletal.smk, S1) authors a pose library from a rig file, and
-# `snakemake author_volumetric` (rules/volumetric.smk, S4) from a pose script of handle moves.
+# Beside it, `snakemake skeletal_pose` (rules/skeletal.smk, S1) authors a pose library from a rig file, and
+# `snakemake volumetric_pose` (rules/volumetric.smk, S4) from a pose script of handle moves.
 # Rules (rules/<topic>.smk) only wire stage scripts (stages/<rule>.py); the math is in lib/posefix/.
 from snakemake.utils import min_version
 
@@ -20,8 +20,8 @@ configfile: os.path.join(workflow.basedir, "config.yaml")
 include: "rules/common.smk"
 include: "rules/library.smk"
 include: "rules/spacetime.smk"
-include: "rules/repair.smk"
-include: "rules/check.smk"
+include: "rules/verify.smk"
+include: "rules/downstream.smk"
 include: "rules/report.smk"
 include: "rules/baselines.smk"
 include: "rules/skeletal.smk"

@@ -31,7 +31,7 @@ def run_check(folder, workers):
     import h5py
     from threadpoolctl import threadpool_limits
 
-    from posefix.check.downstream import downstream_check
+    from posefix.downstream.check import downstream_check
 
     with h5py.File(Path(folder) / "keyframes.h5", "r") as fh:
         V_ref, target, F = fh["reference"][()], fh["target"][()], fh["faces"][()]

@@ -4,7 +4,7 @@ Next to S1 Fig. 12-13 and §4: an ellipsoid (axes 2 : 1 : 0.5, an icosphere of 2
 19.6k) bent by 60 degrees about its middle through a three-joint stick figure: S1's error sum |f| over the
 deformed balls for SSD, the variational reconstruction and the medial-ball flow, with seconds; the flow's
 seconds per iteration at 5,120 triangles (S1: 4.9k, 0.16 s). Then the demo limb's poses authored from
-rigs/demo-limb.yaml (intersecting faces: the demo's LBS targets, our SSD, variational, flow with S1's
+examples/demo-limb.yaml (intersecting faces: the demo's LBS targets, our SSD, variational, flow with S1's
 flow and with posefix's margin), and the skeletal meshes of the shared references (bad medial balls).
 """
 
@@ -77,7 +77,7 @@ def bent_ellipsoid(subdivisions, margin_rel):
 def demo_rows(margin_rel):
     """Intersecting faces per demo pose: LBS target, SSD, variational, flow (S1's and with the margin)."""
     V, F, targets = demo.demo_library()
-    rig, poses = read_rig(ROOT / "rigs" / "demo-limb.yaml")
+    rig, poses = read_rig(ROOT / "examples" / "demo-limb.yaml")
     poser = SkeletalPoser(V, F, skeletal_mesh(V, F).S, rig)
     count = lambda X: int(intersecting_faces(self_intersecting_pairs(X, F), len(F)).sum())  # noqa: E731
     rows = {}
@@ -136,7 +136,7 @@ def markdown(result):
               f"{e20['triangles']} triangles: {e20['flow_s1']['step_s']:.3f} and {e20['flow']['step_s']:.3f} s per "
               f"step: S1's candidates (all vertices within R_i) grow with the square of the resolution, the "
               f"default keeps the nearest {NEIGHBOURS}.", "",
-              "### Demo limb authored from rigs/demo-limb.yaml: intersecting faces", "",
+              "### Demo limb authored from examples/demo-limb.yaml: intersecting faces", "",
               "| pose | LBS (demo target) | SSD (our weights) | variational | + S1 flow (margin 0, all candidates) "
               "| + flow (default margin) | flow s |", "|---|---:|---:|---:|---:|---:|---:|"]
     for name, r in result["demo"].items():

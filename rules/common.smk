@@ -64,6 +64,18 @@ def stage_script(name):
     return str(Path(workflow.basedir) / "stages" / f"{name}.py")
 
 
+RENAMED_RULES = {"author": "skeletal_pose", "author_volumetric": "volumetric_pose",
+                 "animate_volumetric": "volumetric_animate"}
+"""Rules renamed in 2026-12 (old name: new name, so that a rule, its script and its config section share one name);
+the old names stay as aliases for one release and say so."""
+
+
+onstart:
+    for _old in sorted(RENAMED_RULES.keys() & set(workflow.dag_settings.targets)):
+        print(f"posefix: rule '{_old}' is now '{RENAMED_RULES[_old]}' (the old name goes in the next release)",
+              file=sys.stderr)
+
+
 CODE = CodeFingerprints(Path(workflow.basedir) / "lib", cache=Path(".snakemake") / "posefix-code.json")
 
 

@@ -1,16 +1,16 @@
 # S4 pose authoring: a reference mesh and a pose script -> a pose library (stages/volumetric_pose.py), or
 # marker tracks -> an animated pose library (stages/volumetric_animate.py). Not part of `rule all`: run
-# `snakemake author_volumetric` or `snakemake animate_volumetric`, then repair the result with
+# `snakemake volumetric_pose` or `snakemake volumetric_animate`, then repair the result with
 # `snakemake --config library=<out>/<script or tracks name>`.
 
 VOLUMETRIC = config["volumetric_pose"]
-VOLUMETRIC_SCRIPT = VOLUMETRIC["script"] or str(Path(workflow.basedir) / "poses" / "demo-limb-volumetric.yaml")
+VOLUMETRIC_SCRIPT = VOLUMETRIC["script"] or str(Path(workflow.basedir) / "examples" / "demo-limb-volumetric.yaml")
 VOLUMETRIC_MESH = VOLUMETRIC["mesh"] or f"{config['demo']['folder']}/{demo.REFERENCE_NAME}{demo.REFERENCE_SUFFIX}"
 VOLUMETRIC_NAME = Path(VOLUMETRIC_SCRIPT).name.split(".")[0]
 VOLUMETRIC_AUTHORED = f"{config['results']}/authored/{VOLUMETRIC_NAME}"
 
 
-rule author_volumetric:
+rule volumetric_pose:
     input:
         mesh=VOLUMETRIC_MESH,
         script=VOLUMETRIC_SCRIPT,
@@ -35,13 +35,13 @@ rule author_volumetric:
 
 
 ANIMATE = config["volumetric_animate"]
-ANIMATE_TRACKS = ANIMATE["tracks"] or str(Path(workflow.basedir) / "poses" / "demo-limb-markers.csv")
+ANIMATE_TRACKS = ANIMATE["tracks"] or str(Path(workflow.basedir) / "examples" / "demo-limb-markers.csv")
 ANIMATE_MESH = ANIMATE["mesh"] or f"{config['demo']['folder']}/{demo.REFERENCE_NAME}{demo.REFERENCE_SUFFIX}"
 ANIMATE_NAME = Path(ANIMATE_TRACKS).name.split(".")[0]
 ANIMATED = f"{config['results']}/authored/{ANIMATE_NAME}"
 
 
-rule animate_volumetric:
+rule volumetric_animate:
     input:
         mesh=ANIMATE_MESH,
         tracks=ANIMATE_TRACKS,
@@ -66,3 +66,13 @@ rule animate_volumetric:
         "python {params.script:q} --mesh {input.mesh:q} --tracks {input.tracks:q} --out {output.library:q}"
         " --artifact {output.artifact:q} --name {params.name:q} {params.options} {params.rigid}"
         " --threads {threads} --log {log:q}"
+
+
+rule author_volumetric:  # its name before 2026-12 (common.smk: RENAMED_RULES)
+    input:
+        rules.volumetric_pose.output,
+
+
+rule animate_volumetric:  # its name before 2026-12 (common.smk: RENAMED_RULES)
+    input:
+        rules.volumetric_animate.output,

@@ -1,7 +1,7 @@
 """Stage downstream: does a downstream nonlinear solver converge better on the repaired pose? (S0 §5)
 
 Runs the example-driven discrete-shell deformation (Fröhlich & Botsch 2011; Gauss–Newton, see
-``posefix.check``) from the reference towards the original target and towards the repaired pose,
+``posefix.downstream``) from the reference towards the original target and towards the repaired pose,
 for every stiffness k_b in ``--k-bend`` and weight alpha in ``--alphas`` (a grid: single settings
 are fragile). The same three far-apart handle vertices are pinned at their linear blend in every
 run; every ``--baseline`` repair is a further example, checked over the same grid. Writes per-run
@@ -12,8 +12,8 @@ runs at a time (processes of one thread each; the same iterations and stop reaso
 
 import posefix.workflow.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; runtime defaults before numpy)
 
-from posefix.check.downstream import downstream_check
-from posefix.check.gauss_newton import STOP_REASONS, SolverSettings
+from posefix.downstream.check import downstream_check
+from posefix.downstream.gauss_newton import STOP_REASONS, SolverSettings
 from posefix.io.artifacts import read_artifact, read_baseline, write_artifact
 from posefix.workflow.cli import float_list, library_defaults, named_path, run_stage, stage_parser
 from posefix.io.files import write_figure

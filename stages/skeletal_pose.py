@@ -41,7 +41,7 @@ def build_parser():
     parser = stage_parser("skeletal_pose", __doc__)
     poser, flow = (library_defaults(f) for f in (SkeletalPoser, SkeletalPoser.author))
     parser.add_argument("--mesh", required=True, help="reference mesh (.obj/.ply/.off, optionally .gz)")
-    parser.add_argument("--rig", required=True, help="rig file (YAML: joints and poses, see rigs/demo-limb.yaml)")
+    parser.add_argument("--rig", required=True, help="rig file (YAML: joints and poses, see examples/demo-limb.yaml)")
     parser.add_argument("--out", required=True, help="folder of the authored pose library")
     parser.add_argument("--artifact", required=True, help="HDF5 file of the skeletal mesh and the metrics")
     parser.add_argument("--name", default=None, help="library name: files <name>-reference.*; default the rig's")

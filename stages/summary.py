@@ -21,7 +21,7 @@ from posefix.workflow.cli import library_defaults, run_stage, stage_parser
 from posefix.io.errors import InputError
 from posefix.io.files import atomic_write_bytes
 from posefix.workflow.timings import benchmark_seconds
-from posefix.repair.deviation import deviation
+from posefix.verify.deviation import deviation
 from posefix.report.summary import DOWNSTREAM_DATASETS, SUMMARY_STAGES, baseline_entry, pose_entry, summary_markdown
 
 METRICS = ("keyframes", "constraints", "fit", "integrate", "verify")

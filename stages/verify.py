@@ -2,10 +2,10 @@
 
 Two finishes (``--finish``). ``contact``: the contact solver (IPC) moves the integrated pose, V_C onto
 its targets and the rest toward its goal, and no intersection that the reference does not have can
-form (``posefix.repair.sequence.finish_pose``). ``snap``: puts the constrained vertices exactly on
+form (``posefix.verify.sequence.finish_pose``). ``snap``: puts the constrained vertices exactly on
 their targets (blending the fit's residual into the rest), replaces regions by the target where
 integration could not reach it (S0 Fig. 9) and untangles new intersections
-(``posefix.repair.sequence.repair_pose``). Both then count intersecting faces of reference, target
+(``posefix.verify.sequence.repair_pose``). Both then count intersecting faces of reference, target
 and repaired pose ("new": intersecting in the repaired pose, not in the reference) and measure the
 deviation from the target over V_C and the rest. Stage ``export`` writes the mesh.
 """
@@ -21,10 +21,10 @@ from posefix.io.artifacts import read_artifact, write_artifact
 from posefix.workflow.cli import run_stage, stage_parser
 from posefix.workflow.contact_options import add_contact_options, contact_settings
 from posefix.workflow.timings import Timings
-from posefix.repair.contact_finish import FinishSettings
-from posefix.repair.flags import describe_flags
-from posefix.repair.sequence import RepairSettings, finish_pose, repair_pose
-from posefix.repair.state import RepairProblem
+from posefix.verify.contact_finish import FinishSettings
+from posefix.verify.flags import describe_flags
+from posefix.verify.sequence import RepairSettings, finish_pose, repair_pose
+from posefix.verify.state import RepairProblem
 from posefix.spacetime.classification import split_frames
 
 DOCS = {

@@ -129,7 +129,7 @@ def cluster_background(request, tmp_path_factory):
         yield None
         return
     import test_cluster
-    if test_cluster.can_run_here():
+    if test_cluster.reason_not_runnable_here():
         yield None
         return
     run = test_cluster.BackgroundRun(tmp_path_factory.mktemp("slurm"), tmp_path_factory.mktemp("cluster-run"))

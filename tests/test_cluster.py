@@ -190,7 +190,7 @@ class BackgroundRun(threading.Thread):
         print(down.stdout, down.stderr, sep="")
 
 
-def can_run_here():
+def reason_not_runnable_here():
     """Why the cluster part cannot run on this machine (the module's skip reasons), or None."""
     for mark in pytestmark:
         if mark.name == "skipif" and mark.args[0]:

@@ -14,15 +14,15 @@ import pytest
 import yaml
 
 from conftest import ROOT
-from posefix.check.downstream import deform_towards, downstream_check
-from posefix.check.gauss_newton import SolverSettings
-from posefix.check.shells import shell_energy
+from posefix.downstream.check import deform_towards, downstream_check
+from posefix.downstream.gauss_newton import SolverSettings
+from posefix.downstream.shells import shell_energy
 from posefix.mesh.contact_solver import ContactSettings
 from posefix.mesh.contacts import contact_vertices
 from posefix.mesh.distortion import distortion_summary
 from posefix.workflow.demo import demo_library
-from posefix.repair.contact_finish import FinishSettings
-from posefix.repair.sequence import RepairSettings
+from posefix.verify.contact_finish import FinishSettings
+from posefix.verify.sequence import RepairSettings
 from posefix.skeletal.authoring import SkeletalPoser
 from posefix.skeletal.flow import MedialBallFlow, candidate_balls, medial_ball_flow, nearest_balls
 from posefix.skeletal.reconstruction import SkeletalReconstruction, collapsed_faces, frame_maps

@@ -30,7 +30,7 @@ def checkout(tmp_path):
     copy.mkdir()
     for name in ("Snakefile", "config.yaml"):
         shutil.copy(ROOT / name, copy / name)
-    for name in ("rules", "envs", "stages", "lib", "schemas", "profiles", "poses", "rigs"):
+    for name in ("rules", "envs", "stages", "lib", "schemas", "profiles", "examples"):
         shutil.copytree(ROOT / name, copy / name, ignore=shutil.ignore_patterns("__pycache__", "*.egg-info"))
     return copy
 
@@ -80,7 +80,7 @@ def test_adding_a_pose_plans_only_that_pose_and_a_code_change_only_what_it_chang
     proc = run(checkout, tmp_path, *config)
     assert proc.returncode == 0, proc.stderr[-3000:]
     # a comment in the library module of the verify stage: verify and what reads its output rerun, nothing else
-    module = checkout / "lib" / "posefix" / "repair" / "sequence.py"
+    module = checkout / "lib" / "posefix" / "verify" / "sequence.py"
     module.write_text(module.read_text() + "\n# a comment\n")
     jobs = planned(checkout, tmp_path, *config)
     assert set(jobs) == {"verify", "export", "downstream", "render", "summary", "overview", "all"}

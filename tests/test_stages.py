@@ -70,9 +70,9 @@ def demo_artifacts(tmp_path_factory):
     run_stage("skeleton", "--reference", ref, "--out", tmp / "skeleton.h5")
     run_stage("repair_medial", "--reference", ref, "--target", tgt, "--skeleton", tmp / "skeleton.h5",
               "--out", tmp / "repair_medial.h5")
-    run_stage("volumetric_pose", "--mesh", ref, "--script", ROOT / "poses" / "demo-limb-volumetric.yaml",
+    run_stage("volumetric_pose", "--mesh", ref, "--script", ROOT / "examples" / "demo-limb-volumetric.yaml",
               "--out", tmp / "authored", "--artifact", tmp / "volumetric_pose.h5", "--tet-vertices", 300)
-    run_stage("volumetric_animate", "--mesh", ref, "--tracks", ROOT / "poses" / "demo-limb-markers.csv",
+    run_stage("volumetric_animate", "--mesh", ref, "--tracks", ROOT / "examples" / "demo-limb-markers.csv",
               "--out", tmp / "animated", "--artifact", tmp / "volumetric_animate.h5", "--tet-vertices", 300)
     run_stage("tet_mesh", "--reference", ref, "--out", tmp / "tet_mesh.h5", "--tet-vertices", 300)
     run_stage("repair_volumetric", "--reference", ref, "--target", tgt, "--classify", tmp / "classify.h5",
@@ -99,7 +99,7 @@ def test_artifact_attributes_and_documentation(demo_artifacts, stage):
 
 
 def test_downstream_runs_every_setting_towards_both_examples(demo_artifacts):
-    from posefix.check.gauss_newton import STOP_REASONS
+    from posefix.downstream.gauss_newton import STOP_REASONS
     with h5py.File(demo_artifacts / "downstream.h5", "r") as fh:
         assert fh["alpha"][()].tolist() == [1.0] * 4 and fh["k_bend"][()].tolist() == [0.01, 0.01, 0.1, 0.1]
         assert fh["example"][()].tolist() == [0, 1, 0, 1]
@@ -258,7 +258,7 @@ def authored(tmp_path_factory):
     folder = tmp_path_factory.mktemp("authored")
     V, F, _ = demo.demo_library(around=12)
     write_mesh(folder / "limb.obj", V, F)
-    args = ["--mesh", folder / "limb.obj", "--rig", ROOT / "rigs" / "demo-limb.yaml", "--max-iters", 5]
+    args = ["--mesh", folder / "limb.obj", "--rig", ROOT / "examples" / "demo-limb.yaml", "--max-iters", 5]
     run_stage("skeletal_pose", *args, "--out", folder / "lib", "--artifact", folder / "a.h5")
     run_stage("skeletal_pose", *args, "--out", folder / "again", "--artifact", folder / "b.h5")
     return folder, V, F

@@ -88,7 +88,7 @@ def test_the_report_compares_s0_with_the_baseline_repairs(demo_run, name):
     import json
     from matplotlib.image import imread
     from posefix.workflow.timings import benchmark_seconds
-    from posefix.repair.deviation import deviation
+    from posefix.verify.deviation import deviation
     summary = json.loads((demo_run / "reports" / "demo" / "summary.json").read_text())
     for e in summary["poses"]:
         folder = demo_run / "results" / "demo" / e["pose"]
@@ -266,10 +266,12 @@ def test_nested_config_overrides_reach_the_stages(tmp_path):
 
 
 def test_author_a_library_from_the_demo_rig_and_repair_it(tmp_path):
-    """`snakemake author` (S1: the demo rig -> <pose>-ssd/-variational/-flow), then the S0 repair of one of them."""
+    """`snakemake skeletal_pose` (S1: the demo rig -> <pose>-ssd/-variational/-flow), then the S0 repair of one of them.
+    Called by its name before 2026-12 (`author`), which still works for a release and says the new one."""
     import json
     proc = snakemake(tmp_path, "author", "--config", "skeletal_pose={'max_iters': 20}")
     assert proc.returncode == 0, proc.stderr[-3000:]
+    assert "posefix: rule 'author' is now 'skeletal_pose'" in proc.stderr
     library = tmp_path / "data" / "authored" / "demo-limb"
     names = sorted(p.name for p in library.iterdir() if not p.name.startswith("."))  # and .snakemake_timestamp
     assert names[0] == "demo-01-flow.obj" and "demo-limb-reference.obj" in names and len(names) == 13
@@ -284,10 +286,10 @@ def test_author_a_library_from_the_demo_rig_and_repair_it(tmp_path):
 
 
 def test_author_a_library_from_the_demo_pose_script_and_repair_it(tmp_path):
-    """`snakemake author_volumetric` (S4: the demo pose script -> vol-bend, vol-fold, vol-twist), then the S0
+    """`snakemake volumetric_pose` (S4: the demo pose script -> vol-bend, vol-fold, vol-twist), then the S0
     repair of the folded one, with the baseline repairs beside it."""
     import json
-    proc = snakemake(tmp_path, "author_volumetric", "--config", "volumetric_pose={'tet_vertices': 400}")
+    proc = snakemake(tmp_path, "volumetric_pose", "--config", "volumetric_pose={'tet_vertices': 400}")
     assert proc.returncode == 0, proc.stderr[-3000:]
     library = tmp_path / "data" / "authored" / "demo-limb-volumetric"
     names = sorted(p.name for p in library.iterdir() if not p.name.startswith("."))
@@ -301,11 +303,11 @@ def test_author_a_library_from_the_demo_pose_script_and_repair_it(tmp_path):
 
 
 def test_animate_a_library_from_the_demo_markers_and_repair_it(tmp_path):
-    """`snakemake animate_volumetric` (S4 §3.2: 8 markers, 13 frames of the demo limb bending) gives a pose
+    """`snakemake volumetric_animate` (S4 §3.2: 8 markers, 13 frames of the demo limb bending) gives a pose
     library of the reference's faces and vertex order that the repair workflow reads."""
     import json
     from posefix.io.meshes import read_mesh
-    proc = snakemake(tmp_path, "animate_volumetric", "--config", "volumetric_animate={'tet_vertices': 400}")
+    proc = snakemake(tmp_path, "volumetric_animate", "--config", "volumetric_animate={'tet_vertices': 400}")
     assert proc.returncode == 0, proc.stderr[-3000:]
     library = tmp_path / "data" / "authored" / "demo-limb-markers"
     names = sorted(p.name for p in library.iterdir() if not p.name.startswith("."))

@@ -7,7 +7,7 @@ import pytest
 
 from conftest import run_stage
 from posefix.io.artifacts import write_artifact
-from posefix.repair.deviation import deviation
+from posefix.verify.deviation import deviation
 from posefix.report.summary import SUMMARY_STAGES, baseline_entry, downstream_entry, pose_entry, summary_markdown
 
 

@@ -28,7 +28,7 @@ def test_weights_are_a_partition_of_unity_one_hot_mid_bone_and_half_at_a_joint()
 
 def test_the_demo_rig_file_reproduces_the_demo_poses_with_the_demo_weights():
     V, F, poses = demo.demo_library(around=12)
-    rig, rig_poses = read_rig(ROOT / "rigs" / "demo-limb.yaml")
+    rig, rig_poses = read_rig(ROOT / "examples" / "demo-limb.yaml")
     assert list(rig_poses) == [p.name for p in demo.POSES]
     weights = demo.skinning_weights(V[:, 0])
     for name, pose in rig_poses.items():

@@ -9,7 +9,7 @@ from posefix.skeletal.rig_files import read_rig
 
 
 def test_the_demo_rig_reads_with_its_joints_and_poses():
-    rig, poses = read_rig(ROOT / "rigs" / "demo-limb.yaml")
+    rig, poses = read_rig(ROOT / "examples" / "demo-limb.yaml")
     assert rig.names == ("root", "j1", "j2", "tip") and rig.parents.tolist() == [-1, 0, 1, 2]
     assert rig.bones.tolist() == [[0, 1], [1, 2], [2, 3]]
     assert np.allclose(poses["demo-02"].rotations[1] @ [0, 0, 1.0], [np.sin(np.radians(120)), 0, np.cos(np.radians(120))])

@@ -46,9 +46,9 @@ def test_rigidly_moved_markers_move_the_mesh_rigidly(bar):
 def test_the_stage_writes_the_same_library_from_csv_and_npz(tmp_path, demo):
     ref = tmp_path / "demo-reference.obj"
     write_mesh(ref, demo[0], demo[1])  # the demo limb the tracks were made on
-    tracks = read_tracks(ROOT / "poses" / "demo-limb-markers.csv")
+    tracks = read_tracks(ROOT / "examples" / "demo-limb-markers.csv")
     np.savez(tmp_path / "demo.npz", tracks=tracks.positions, markers=tracks.markers, frames=tracks.frames)
-    for source, name in ((ROOT / "poses" / "demo-limb-markers.csv", "csv"), (tmp_path / "demo.npz", "npz")):
+    for source, name in ((ROOT / "examples" / "demo-limb-markers.csv", "csv"), (tmp_path / "demo.npz", "npz")):
         run_stage("volumetric_animate", "--mesh", ref, "--tracks", source, "--out", tmp_path / name, "--name", "m",
                   "--artifact", tmp_path / f"{name}.h5", "--tet-vertices", 300)
     V, F = read_mesh(ref)

@@ -78,7 +78,7 @@ def test_a_poser_carries_the_surface_rigidly_and_keeps_the_rigid_region(tmp_path
 def test_the_stage_authors_the_demo_script_into_a_library(tmp_path):
     V, F, _ = demo.demo_library(around=16)
     write_mesh(tmp_path / "ref.obj", V, F)
-    script = __import__("conftest").ROOT / "poses" / "demo-limb-volumetric.yaml"
+    script = __import__("conftest").ROOT / "examples" / "demo-limb-volumetric.yaml"
     run_stage("volumetric_pose", "--mesh", tmp_path / "ref.obj", "--script", script, "--out", tmp_path / "lib",
               "--artifact", tmp_path / "a.h5", "--tet-vertices", 300)
     names = sorted(p.name for p in (tmp_path / "lib").iterdir())

@@ -44,8 +44,8 @@ def posefix_logger():
 
 def test_library_loggers_reach_the_stage_log_file(tmp_path, capsys, posefix_logger):
     log = configure_logging("demo", tmp_path / "demo.log")
-    logging.getLogger("posefix.repair.sequence").info("from the library")
-    logging.getLogger("posefix.check.gauss_newton").debug("detail")
+    logging.getLogger("posefix.verify.sequence").info("from the library")
+    logging.getLogger("posefix.downstream.gauss_newton").debug("detail")
     log.info("from the stage")
     for handler in posefix_logger.handlers:
         handler.flush()

@@ -1,6 +1,6 @@
 """Volumetric pose scripts: handles, rigid regions and per-pose handle moves in YAML (S4 authoring).
 
-Format (``poses/demo-limb-volumetric.yaml``)::
+Format (``examples/demo-limb-volumetric.yaml``)::
 
     handles:                      # name -> region: the tets whose four vertices lie in an axis-aligned box
       base: {box: [[-3.6, -1, -1], [-2.6, 1, 1]]}          # [min corner, max corner], model units
@@ -44,7 +44,7 @@ def read_pose_script(path):
     """Read a pose script (see the module text); raises :class:`InputError` naming the file and the problem."""
     doc = read_yaml(path)
     if not isinstance(doc, dict) or not doc.get("handles") or not doc.get("poses"):
-        raise InputError(path, "needs 'handles' and 'poses' (see poses/demo-limb-volumetric.yaml)")
+        raise InputError(path, "needs 'handles' and 'poses' (see examples/demo-limb-volumetric.yaml)")
     handles = {str(n): _handle(path, n, s) for n, s in doc["handles"].items()}
     rigid = {str(n): _box(path, f"rigid region '{n}'", s) for n, s in (doc.get("rigid") or {}).items()}
     poses = {str(n): _moves(path, n, s, handles) for n, s in doc["poses"].items()}

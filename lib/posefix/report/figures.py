@@ -11,7 +11,7 @@ from matplotlib.colors import to_rgb
 from matplotlib.figure import Figure
 from matplotlib.patches import Patch
 
-from posefix.repair.flags import (CONTACT, FLAGS, PUSHED, REPLACED_NEW_INTERSECTION, REPLACED_PASS_THROUGH,
+from posefix.verify.flags import (CONTACT, FLAGS, PUSHED, REPLACED_NEW_INTERSECTION, REPLACED_PASS_THROUGH,
                                   RIGID_REFERENCE, SEPARATED, SMOOTHED)
 from posefix.report.rasterizer import DISTORTED, HIGHLIGHT, SECONDARY, draw_mesh, face_values, heat_colors, view_limits
 from posefix.report.tables import baseline_names, converged_runs, downstream_counts
@@ -90,7 +90,7 @@ def deviation_map(X, F, R, deviation, replaced, title=""):
     deviation : (n,) float
         ``|repaired - target| / d`` per vertex.
     replaced : (n,) uint8
-        Flags per vertex (:mod:`posefix.repair.flags`); the right panel shows the vertices the fallback
+        Flags per vertex (:mod:`posefix.verify.flags`); the right panel shows the vertices the fallback
         and the pushes moved (:data:`FLAG_COLORS`).
     """
     fig = Figure(figsize=(10, panel_height(view_limits(X, R=R))), dpi=DPI)

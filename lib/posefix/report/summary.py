@@ -6,8 +6,8 @@ artifacts' metrics and Snakemake's benchmark files and calls :func:`pose_entry` 
 
 import numpy as np
 
-from posefix.check.downstream import EXAMPLES
-from posefix.check.gauss_newton import STOP_REASONS
+from posefix.downstream.check import EXAMPLES
+from posefix.downstream.gauss_newton import STOP_REASONS
 from posefix.report.tables import comparison_markdown, downstream_markdown
 
 DEVIATIONS = ("constrained_max", "constrained_mean", "constrained_p95", "free_max", "free_mean", "free_p95")
@@ -78,7 +78,7 @@ def baseline_entry(name, metrics, deviation, downstream, distortion=None):
         The ``metrics`` of its artifact (``<pose>/<name>.h5``).
     deviation : dict
         Deviation summary of its repaired pose from the target over ``V_C`` and the rest
-        (:func:`posefix.repair.deviation.deviation`, the same as S0's).
+        (:func:`posefix.verify.deviation.deviation`, the same as S0's).
     downstream : dict of str -> ndarray
         Datasets of ``downstream.h5``; the entry gets a ``downstream`` like S0's (:func:`downstream_entry`)
         when the check ran towards the baseline.

@@ -1,4 +1,4 @@
-"""Rig files: a stick-figure skeleton and its poses in YAML (format: ``rigs/demo-limb.yaml``).
+"""Rig files: a stick-figure skeleton and its poses in YAML (format: ``examples/demo-limb.yaml``).
 
 ::
 
@@ -37,7 +37,7 @@ def read_rig(path):
     """
     doc = read_yaml(path)
     if not isinstance(doc, dict) or not doc.get("joints") or not doc.get("poses"):
-        raise InputError(path, "needs 'joints' and 'poses' (see rigs/demo-limb.yaml)")
+        raise InputError(path, "needs 'joints' and 'poses' (see examples/demo-limb.yaml)")
     rig = _rig(path, doc["joints"])
     return rig, {str(name): _pose(path, rig, name, spec) for name, spec in doc["poses"].items()}
 

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from test_gauss_newton import _bend, _strip
-from posefix.check.downstream import EXAMPLES, downstream_check, handle_vertices
+from posefix.downstream.check import EXAMPLES, downstream_check, handle_vertices
 
 
 def test_handles_are_far_apart_and_deterministic():

@@ -15,8 +15,8 @@ from dataclasses import dataclass
 import numpy as np
 from threadpoolctl import threadpool_limits
 
-from posefix.check.gauss_newton import STOP_REASONS, gauss_newton
-from posefix.check.shells import mesh_hinges, shell_energy
+from posefix.downstream.gauss_newton import STOP_REASONS, gauss_newton
+from posefix.downstream.shells import mesh_hinges, shell_energy
 
 log = logging.getLogger(__name__)
 
@@ -43,7 +43,7 @@ def deform_towards(V_ref, F, V_example, alpha, k_bend, k_stretch=1.0, settings=N
 
     Starts from the reference with three far-apart vertices (:func:`handle_vertices`) pinned at their linear
     blend ``(1 - alpha) V_ref + alpha V_example`` and runs :func:`gauss_newton` on :func:`shell_energy`
-    (``hinges``: :func:`posefix.check.shells.mesh_hinges` of ``F``, when already built). Returns its
+    (``hinges``: :func:`posefix.downstream.shells.mesh_hinges` of ``F``, when already built). Returns its
     :class:`SolveResult`.
     """
     h = handle_vertices(V_ref)
@@ -55,7 +55,7 @@ def deform_towards(V_ref, F, V_example, alpha, k_bend, k_stretch=1.0, settings=N
 @dataclass
 class DownstreamCheck:
     """The runs of :func:`downstream_check`: ``grid`` (alpha, k_b, example code) and a
-    :class:`~posefix.check.gauss_newton.SolveResult` per run, in the same order, the ``handles`` and
+    :class:`~posefix.downstream.gauss_newton.SolveResult` per run, in the same order, the ``handles`` and
     the ``examples``' names (index: example code)."""
 
     grid: list
@@ -110,7 +110,7 @@ def downstream_check(V_ref, F, examples, alphas=(0.5, 1.0), k_bend=(1e-3, 1e-2, 
     alphas, k_bend : sequence of float
         Interpolation weights and bending stiffnesses of the grid.
     k_stretch : float
-    settings : posefix.check.gauss_newton.SolverSettings, optional
+    settings : posefix.downstream.gauss_newton.SolverSettings, optional
     workers : int
         Runs at a time, each in a process of its own with one BLAS thread: the same runs as one after
         the other (iterations, stop reasons; bit for bit on the demo, but runs that end in a collapsed

@@ -3,7 +3,7 @@
 import numpy as np
 
 from conftest import ROOT
-from posefix.repair.flags import (FLAGS, PUSHED, REPLACED_NEW_INTERSECTION, REPLACED_PASS_THROUGH, REPRODUCED,
+from posefix.verify.flags import (FLAGS, PUSHED, REPLACED_NEW_INTERSECTION, REPLACED_PASS_THROUGH, REPRODUCED,
                                   SEPARATED, SMOOTHED, describe_flags, flag_counts)
 
 

@@ -5,8 +5,8 @@ import numpy as np
 from conftest import grid_sheet
 from posefix.mesh.harmonic import harmonic_extension
 from posefix.mesh.intersections import self_intersecting_pairs
-from posefix.repair.reproduce import reproduce_targets
-from posefix.repair.state import RepairProblem
+from posefix.verify.reproduce import reproduce_targets
+from posefix.verify.state import RepairProblem
 
 
 def _sheet_over_patch():

@@ -7,10 +7,10 @@ from conftest import icosphere
 from posefix.mesh.geometry import bbox_diagonal
 from posefix.mesh.intersections import self_intersecting_pairs
 from posefix.mesh.primitives import capsule
-from posefix.repair.fallback import fallback, pass_through_regions, transient_pairs
-from posefix.repair.flags import REPLACED_NEW_INTERSECTION, REPLACED_PASS_THROUGH
-from posefix.repair.sequence import RepairSettings
-from posefix.repair.state import RepairProblem
+from posefix.verify.fallback import fallback, pass_through_regions, transient_pairs
+from posefix.verify.flags import REPLACED_NEW_INTERSECTION, REPLACED_PASS_THROUGH
+from posefix.verify.sequence import RepairSettings
+from posefix.verify.state import RepairProblem
 from posefix.spacetime.classification import constraint_mask
 from posefix.spacetime.constraints import spacetime_constraints
 from posefix.spacetime.fit import FitSettings, iterate, start_fit

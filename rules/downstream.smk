@@ -1,4 +1,4 @@
-# Per pose: the downstream Gauss-Newton discrete-shell check (S0 §5, posefix.check), parallel to
+# Per pose: the downstream Gauss-Newton discrete-shell check (S0 §5, posefix.downstream), parallel to
 # export and render, so it adds no level to the per-pose chain. With downstream.baselines, also
 # towards the baseline repairs' poses (config baselines).
 CHECK_BASELINES = config["downstream"]["baselines"]

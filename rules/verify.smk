@@ -1,4 +1,4 @@
-# Per pose: verification and repair of the integrated pose (posefix.repair), and the repaired mesh
+# Per pose: verification and repair of the integrated pose (posefix.verify), and the repaired mesh
 # in the target's format.
 
 rule verify:

@@ -6,16 +6,16 @@ for the two triggers). Such regions, with the unconstrained parts they touch, ar
 target when that adds no intersecting face the target does not have there (no seam between
 copied and integrated parts). The target's own intersections in the copied region come back with
 it, as in S0; they are reported separately. Then the faces that still newly intersect are
-untangled (:mod:`posefix.repair.untangle`).
+untangled (:mod:`posefix.verify.untangle`).
 """
 
 import numpy as np
 
 from posefix.mesh.intersections import new_pairs
 from posefix.mesh.topology import grow_rings, selection_components
-from posefix.repair.flags import REPLACED_PASS_THROUGH
-from posefix.repair.state import RepairState
-from posefix.repair.untangle import untangle
+from posefix.verify.flags import REPLACED_PASS_THROUGH
+from posefix.verify.state import RepairState
+from posefix.verify.untangle import untangle
 
 
 def fallback(problem, X, threshold, settings):
@@ -23,12 +23,12 @@ def fallback(problem, X, threshold, settings):
 
     Parameters
     ----------
-    problem : posefix.repair.state.RepairProblem
+    problem : posefix.verify.state.RepairProblem
     X : (n, 3) float
         Integrated (and snapped) positions.
     threshold : float
         Distance (length units) beyond which a vertex counts as not having reached its target.
-    settings : posefix.repair.sequence.RepairSettings
+    settings : posefix.verify.sequence.RepairSettings
         ``ring`` (rings grown around the triggers and first tried around new intersections),
         ``max_rings`` (most rings tried around new intersections), ``repair_new`` (untangle them).
 
@@ -37,7 +37,7 @@ def fallback(problem, X, threshold, settings):
     X : (n, 3) float
         Positions after the replacements.
     replaced : (n,) uint8
-        Flags per vertex (:mod:`posefix.repair.flags`).
+        Flags per vertex (:mod:`posefix.verify.flags`).
     new : (m,) bool
         New intersecting faces that remain.
     """
@@ -94,7 +94,7 @@ def pass_through_regions(problem, far, ring):
 
     Parameters
     ----------
-    problem : posefix.repair.state.RepairProblem
+    problem : posefix.verify.state.RepairProblem
     far : (n,) bool
         Vertices that did not reach their targets.
     ring : int

@@ -9,10 +9,10 @@ from posefix.mesh.contact_solver import ContactSettings, ContactSolver
 from posefix.mesh.distortion import distortion_summary
 from posefix.mesh.intersections import intersecting_faces, self_intersecting_pairs
 from posefix.mesh.rotations import rotation_exp
-from posefix.repair.contact_finish import FinishSettings
-from posefix.repair.flags import CONTACT, REPLACED_NEW_INTERSECTION, REPRODUCED
-from posefix.repair.sequence import finish_pose, repair_pose
-from posefix.repair.state import RepairProblem
+from posefix.verify.contact_finish import FinishSettings
+from posefix.verify.flags import CONTACT, REPLACED_NEW_INTERSECTION, REPRODUCED
+from posefix.verify.sequence import finish_pose, repair_pose
+from posefix.verify.state import RepairProblem
 from test_sequence import _expand
 
 

@@ -51,7 +51,7 @@ def reproduce_targets(problem, X, keep, hold):
 
     Parameters
     ----------
-    problem : posefix.repair.state.RepairProblem
+    problem : posefix.verify.state.RepairProblem
         Target, faces, adjacency and the reference's intersecting faces.
     X : (n, 3) float
         Current positions.

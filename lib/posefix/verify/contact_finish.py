@@ -99,7 +99,7 @@ def contact_finish(problem, solver, samples, settings=FinishSettings()):
 
     Parameters
     ----------
-    problem : posefix.repair.state.RepairProblem
+    problem : posefix.verify.state.RepairProblem
         Target, ``V_C`` mask, adjacency and the reference's intersecting faces.
     solver : posefix.mesh.contact_solver.ContactSolver
         Built on the reference with its intersecting faces tolerated.

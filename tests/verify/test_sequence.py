@@ -5,9 +5,9 @@ import re
 import numpy as np
 
 from conftest import ROOT, grid_sheet
-from posefix.repair.flags import REPLACED_PASS_THROUGH, REPRODUCED
-from posefix.repair.sequence import RepairSettings, repair_pose
-from posefix.repair.state import RepairProblem
+from posefix.verify.flags import REPLACED_PASS_THROUGH, REPRODUCED
+from posefix.verify.sequence import RepairSettings, repair_pose
+from posefix.verify.state import RepairProblem
 
 
 def _two_sheets():

@@ -1,16 +1,16 @@
 """The repair of one integrated pose, as stage ``verify`` runs it: a finish that puts ``V_C`` on its targets,
 then the verification.
 
-Two finishes (config ``verify.finish``): ``contact`` (:func:`finish_pose`, :mod:`posefix.repair.contact_finish`:
+Two finishes (config ``verify.finish``): ``contact`` (:func:`finish_pose`, :mod:`posefix.verify.contact_finish`:
 the contact solver moves the integrated pose, and no new intersection can form) and ``snap``
 (:func:`repair_pose`: snap, fallback, snap again):
 
-1. **Snap** (:mod:`posefix.repair.reproduce`): constrained vertices within ``reach`` of their
+1. **Snap** (:mod:`posefix.verify.reproduce`): constrained vertices within ``reach`` of their
    targets, ``reach = max(threshold, fallback_fit * fit max error)``, are put exactly on them;
    the residual is blended into the rest. First, so that the fallback works on the corrected pose:
    constrained vertices that could not be snapped (that would add intersections) and stay beyond
    ``threshold = fallback_eps * eps`` trigger the pass-through fallback.
-2. **Fallback** (:mod:`posefix.repair.fallback`): pass-through regions copied from the target,
+2. **Fallback** (:mod:`posefix.verify.fallback`): pass-through regions copied from the target,
    new intersections untangled.
 3. **Snap again**: what the fallback untangled may now be snapped.
 4. **Verify**: intersecting faces of the repaired pose, new ones (not in the reference), and the
@@ -24,11 +24,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from posefix.mesh.intersections import intersecting_faces, self_intersecting_pairs
-from posefix.repair.contact_finish import FinishSettings, contact_finish
-from posefix.repair.deviation import deviation
-from posefix.repair.fallback import fallback
-from posefix.repair.flags import CONTACT, PUSHED, REPLACED_NEW_INTERSECTION, REPRODUCED, flag_counts
-from posefix.repair.reproduce import reproduce_targets
+from posefix.verify.contact_finish import FinishSettings, contact_finish
+from posefix.verify.deviation import deviation
+from posefix.verify.fallback import fallback
+from posefix.verify.flags import CONTACT, PUSHED, REPLACED_NEW_INTERSECTION, REPRODUCED, flag_counts
+from posefix.verify.reproduce import reproduce_targets
 
 log = logging.getLogger(__name__)
 
@@ -75,7 +75,7 @@ class RepairResult:
     X : (n, 3) float
         Repaired positions.
     replaced : (n,) uint8
-        Flags per vertex (:mod:`posefix.repair.flags`).
+        Flags per vertex (:mod:`posefix.verify.flags`).
     pairs : (P, 2) int64
         Intersecting face pairs of the repaired pose.
     faces, new : (m,) bool
@@ -83,7 +83,7 @@ class RepairResult:
     deviation, integrated_deviation : (n,) float
         ``|X - target| / d`` per vertex, after the repair and before it.
     summary, integrated : dict
-        Their summaries (:func:`posefix.repair.deviation.deviation`).
+        Their summaries (:func:`posefix.verify.deviation.deviation`).
     seconds : dict
         Wall seconds of ``reproduce`` (both snaps) and ``fallback``, or ``contact``; and ``verify``.
     metrics : dict
@@ -108,7 +108,7 @@ def repair_pose(problem, X, d, eps, fit_max_error_rel, settings=RepairSettings()
 
     Parameters
     ----------
-    problem : posefix.repair.state.RepairProblem
+    problem : posefix.verify.state.RepairProblem
     X : (n, 3) float
         Integrated positions.
     d : float
@@ -143,7 +143,7 @@ def finish_pose(problem, samples, d, solver, settings=FinishSettings()):
 
     Parameters
     ----------
-    problem : posefix.repair.state.RepairProblem
+    problem : posefix.verify.state.RepairProblem
     samples : (S, n, 3) float
         The integrated path lines at their sample times, the integrated pose last.
     d : float

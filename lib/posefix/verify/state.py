@@ -53,7 +53,7 @@ class RepairProblem:
 
 
 class RepairState:
-    """Repaired positions with their intersecting pairs, new faces and flags (:mod:`posefix.repair.flags`).
+    """Repaired positions with their intersecting pairs, new faces and flags (:mod:`posefix.verify.flags`).
 
     Parameters
     ----------

@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from posefix.repair.deviation import deviation
+from posefix.verify.deviation import deviation
 
 
 def test_deviation_summary():

@@ -18,7 +18,7 @@ from posefix.mesh.geometry import edge_lengths
 from posefix.mesh.rotations import kabsch
 from posefix.mesh.separation import separate, separating_axes
 from posefix.mesh.topology import edges, grow_rings, selection_components
-from posefix.repair.flags import REPLACED_NEW_INTERSECTION, RIGID_REFERENCE, SEPARATED, SMOOTHED
+from posefix.verify.flags import REPLACED_NEW_INTERSECTION, RIGID_REFERENCE, SEPARATED, SMOOTHED
 
 SMOOTHING_STEPS = (5, 20, 50)
 """Jacobi steps of the smoothing remedy, tried in turn."""
@@ -33,8 +33,8 @@ def untangle(problem, state, ring, max_rings):
 
     Parameters
     ----------
-    problem : posefix.repair.state.RepairProblem
-    state : posefix.repair.state.RepairState
+    problem : posefix.verify.state.RepairProblem
+    state : posefix.verify.state.RepairState
         Changed in place.
     ring, max_rings : int
     """

@@ -5,9 +5,9 @@ import numpy as np
 from conftest import grid_sheet, icosphere
 from posefix.mesh.intersections import intersecting_faces, self_intersecting_pairs
 from posefix.mesh.topology import vertex_adjacency
-from posefix.repair.flags import RIGID_REFERENCE, SEPARATED, SMOOTHED
-from posefix.repair.state import RepairProblem, RepairState
-from posefix.repair.untangle import smooth, untangle
+from posefix.verify.flags import RIGID_REFERENCE, SEPARATED, SMOOTHED
+from posefix.verify.state import RepairProblem, RepairState
+from posefix.verify.untangle import smooth, untangle
 
 
 def _untangled(V_ref, X, F, mask, frame_pairs, max_rings=6):

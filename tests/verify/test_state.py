@@ -4,7 +4,7 @@ import numpy as np
 
 from conftest import icosphere
 from posefix.mesh.intersections import intersecting_faces, self_intersecting_pairs
-from posefix.repair.state import RepairProblem, RepairState
+from posefix.verify.state import RepairProblem, RepairState
 
 
 def _two_spheres(gap):
