@@ -12,6 +12,7 @@ import scipy.sparse as sp
 
 from posefix.mesh.geometry import face_areas
 from posefix.mesh.sparse import factorized, fill_reducing_order
+from posefix.mesh.tolerances import TINY
 
 log = logging.getLogger(__name__)
 
@@ -110,7 +111,7 @@ def gauss_newton(energy, V0, handles, handle_positions, F, settings=None):
         if (errors[-2] - errors[-1]) / errors[-2] < s.rel_tol and errors[-1] > s.energy_tol:
             g, reason = energy.jacobian(V)[:, free].T @ r, "stall"
             break
-    reduction = float(np.linalg.norm(g0) / max(np.linalg.norm(g), 1e-300))
+    reduction = float(np.linalg.norm(g0) / max(np.linalg.norm(g), TINY))
     return _result(V, (errors, steps), reason, reduction, face_areas(np.asarray(V0, dtype=float), F), F, s, start)
 
 
@@ -149,7 +150,7 @@ def _result(V, history, reason, reduction, rest_area, F, s, start):
     errors, steps = history
     if reason != "converged" and steps and steps[-1] == 1.0 and reduction >= s.gradient_drop:
         reason = "converged"
-    ratio = float(np.min(face_areas(V, F) / np.maximum(rest_area, 1e-300)))
+    ratio = float(np.min(face_areas(V, F) / np.maximum(rest_area, TINY)))
     if reason != "converged" and ratio < s.collapse:
         reason = "collapsed triangle"
     return SolveResult(V, np.array(errors), np.array(steps), reason == "converged", reason, reduction, ratio,

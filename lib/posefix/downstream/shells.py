@@ -25,6 +25,7 @@ import scipy.sparse as sp
 
 from posefix.mesh.geometry import edge_lengths, face_areas
 from posefix.mesh.topology import edges
+from posefix.mesh.tolerances import TINY
 
 
 
@@ -82,7 +83,7 @@ def dihedral_angles(V, H):
     e = xj - xi
     n1 = np.cross(e, xk - xi)
     n2 = np.cross(xi - xj, xl - xj)
-    e_hat = e / np.maximum(np.linalg.norm(e, axis=1), 1e-300)[:, None]
+    e_hat = e / np.maximum(np.linalg.norm(e, axis=1), TINY)[:, None]
     return np.arctan2(np.einsum("ij,ij->i", np.cross(n1, n2), e_hat), np.einsum("ij,ij->i", n1, n2))
 
 
@@ -154,7 +155,7 @@ class ShellEnergy:
         """Entries of the Jacobian in the fixed pattern (``jacobian`` builds the matrix from them)."""
         E = self.hinges.edges
         d = V[E[:, 1]] - V[E[:, 0]]
-        u = d / np.maximum(np.linalg.norm(d, axis=1), 1e-300)[:, None]
+        u = d / np.maximum(np.linalg.norm(d, axis=1), TINY)[:, None]
         gl = self.w_stretch[:, None] * np.c_[-u, u]
         gb = self.w_bend[:, None] * dihedral_gradients(V, self.hinges.hinges).reshape(len(self.w_bend), 12)
         return np.r_[gl.reshape(-1), gb.reshape(-1)]

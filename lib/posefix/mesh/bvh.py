@@ -15,6 +15,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from posefix.mesh.tolerances import TINY
+
 _CHUNK = 16384
 
 
@@ -173,7 +175,7 @@ def _morton_codes(points):
         x = points[:, axis]
         lo = x.min() if len(x) else 0.0
         extent = x.max() - lo if len(x) else 0.0
-        q = ((x - lo) * (65535.0 / extent if extent > 1e-300 else 0.0)).astype(np.uint16)
+        q = ((x - lo) * (65535.0 / extent if extent > TINY else 0.0)).astype(np.uint16)
         low, high = np.take(_SPREAD_BYTE, q & 255), np.take(_SPREAD_BYTE, q >> 8)
         code |= ((high << np.uint64(24)) | low) << np.uint64(2 - axis)
     return code

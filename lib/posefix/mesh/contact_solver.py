@@ -35,6 +35,7 @@ import scipy.sparse as sp
 from posefix.mesh.geometry import bbox_diagonal, vertex_areas
 from posefix.mesh.laplacian import cotangent_laplacian
 from posefix.mesh.sparse import factorized, fill_reducing_order
+from posefix.mesh.tolerances import ROUNDOFF
 
 log = logging.getLogger(__name__)
 
@@ -550,7 +551,7 @@ class _Newton:
         alpha = scale * s.collision_free_step(X, X + scale * dx, swept)
         self.reach = STEP_GROWTH * (alpha * length if alpha < scale else self.reach)
         e0 = self.energy(X, C)
-        while alpha > 1e-12:
+        while alpha > ROUNDOFF:
             X_new = X + alpha * dx
             C_new = s.collisions(X_new, swept)
             if self.energy(X_new, C_new) <= e0:

@@ -5,6 +5,7 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
 from posefix.mesh.sparse import factorized
+from posefix.mesh.tolerances import ROUNDOFF
 
 
 def harmonic_extension(A, values, known):
@@ -75,6 +76,6 @@ def biharmonic_extension(A, values, known, unknown):
         return out
     L = (sp.diags(np.asarray(A.sum(axis=1)).ravel()) - A).tocsc()
     Q = (L.T @ L).tocsr()
-    Q_ss = Q[solve][:, solve] + sp.identity(len(solve)) * 1e-12  # regular where a part touches no zero vertex
+    Q_ss = Q[solve][:, solve] + sp.identity(len(solve)) * ROUNDOFF  # regular where a part touches no zero vertex
     out[solve] = factorized(Q_ss).solve(-(Q[solve][:, np.flatnonzero(known)] @ out[known]))
     return out

@@ -7,6 +7,8 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import breadth_first_order, connected_components, minimum_spanning_tree
 
+from posefix.mesh.tolerances import ROUNDOFF, SMALL_ANGLE
+
 
 def polar_decomposition(J):
     """Polar decomposition ``J = R S`` with ``R`` a proper rotation and ``S`` symmetric.
@@ -90,7 +92,7 @@ def rotation_log(R):
     w, v = q[:, 0], q[:, 1:]
     nv = np.linalg.norm(v, axis=1)
     angle = 2.0 * np.arctan2(nv, w)
-    small = nv < 1e-12
+    small = nv < ROUNDOFF
     scale = np.where(small, 2.0 / np.where(small, w, 1.0), angle / np.where(small, 1.0, nv))
     return v * scale[:, None]
 
@@ -128,7 +130,7 @@ def rotation_to_quaternion(R):
 def rotation_exp(omega):
     """Rotation matrices of rotation vectors (Rodrigues), (m, 3, 3) float."""
     theta = np.linalg.norm(omega, axis=1)
-    small = theta < 1e-6
+    small = theta < SMALL_ANGLE
     t = np.where(small, 1.0, theta)
     a = np.where(small, 1.0 - theta ** 2 / 6.0, np.sin(t) / t)
     b = np.where(small, 0.5 - theta ** 2 / 24.0, (1.0 - np.cos(t)) / t ** 2)

@@ -15,6 +15,7 @@ their mobilities, that restore the clean pose's order along the axis.
 import numpy as np
 
 from posefix.mesh.rotations import kabsch
+from posefix.mesh.tolerances import ROUNDOFF, TINY
 
 _EDGES = ((0, 1), (1, 2), (2, 0))
 
@@ -52,7 +53,7 @@ def separating_axes(Z, F, pairs, Y=None):
     forward = pb.min(axis=2) - pa.max(axis=2)  # B after A along +axis
     backward = pa.min(axis=2) - pb.max(axis=2)
     gap = np.maximum(forward, backward)
-    gap[norm[..., 0] <= 1e-300] = -np.inf
+    gap[norm[..., 0] <= TINY] = -np.inf
     best = np.argmax(gap, axis=1)
     rows = np.arange(len(pairs))
     axes = C[rows, best] * np.where(forward[rows, best] >= backward[rows, best], 1.0, -1.0)[:, None]
@@ -113,7 +114,7 @@ def separate(Y, F, pairs, axes, mobility, margin, sweeps=50):
         if worst == 0.0:
             break
     short = need - np.einsum("ki,ki->k", a, X[j] - X[i])
-    return X, bool(np.all(short <= 1e-12 * (1.0 + need)))
+    return X, bool(np.all(short <= ROUNDOFF * (1.0 + need)))
 
 
 def _normal(T):

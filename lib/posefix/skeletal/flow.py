@@ -27,6 +27,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from posefix.mesh.intersections import intersecting_faces, self_intersecting_pairs
+from posefix.mesh.tolerances import TINY
 
 log = logging.getLogger(__name__)
 
@@ -182,7 +183,7 @@ class MedialBallFlow:
     def _outward(self, X, p):
         """Unit directions from the ball centres ``S_d[p]`` to ``X``, (n, 3)."""
         d = X - self.S_d[p]
-        return d / np.maximum(np.linalg.norm(d, axis=1, keepdims=True), 1e-300)
+        return d / np.maximum(np.linalg.norm(d, axis=1, keepdims=True), TINY)
 
     def balls(self, X):
         """Eq. 10 at ``X``: the nearest and the nearest foreign balls; see :func:`nearest_balls`."""

@@ -31,6 +31,7 @@ from posefix.skeletal.poles import inner_poles
 from posefix.mesh.distance import surface_distance_below
 from posefix.skeletal.quality import bad_centres
 from posefix.skeletal.shrinking_ball import shrinking_ball_centers
+from posefix.mesh.tolerances import TINY
 
 log = logging.getLogger(__name__)
 
@@ -155,7 +156,7 @@ def ray_centres(V, F, X, N, r_max, tol):
     r = np.asarray(r_max, dtype=np.float64)[:, None] * 0.5 ** np.arange(_HALVINGS + 1)  # (k, K)
     C = (X[:, None, :] - r[..., None] * N[:, None, :]).reshape(-1, 3)
     inside = (winding_numbers(V, F, C) >= 0.5).reshape(r.shape)
-    clearance = surface_distance_below(V, F, C, r.ravel()).reshape(r.shape) / np.maximum(r, 1e-300)
+    clearance = surface_distance_below(V, F, C, r.ravel()).reshape(r.shape) / np.maximum(r, TINY)
     passing = inside & (clearance >= 1.0 - tol)
     ok = passing.any(axis=1)
     best = np.argmax(np.where(inside, clearance, -1.0), axis=1)  # ties: the larger r

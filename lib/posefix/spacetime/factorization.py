@@ -26,6 +26,7 @@ from scipy.linalg.blas import dtrsm
 from scipy.linalg.lapack import dgecon, dpstrf
 
 from posefix.spacetime.rbf import POLY_TERMS
+from posefix.mesh.tolerances import ROUNDOFF
 
 
 class FactorizationError(Exception):
@@ -94,7 +95,7 @@ class NullSpaceCholesky:
         """Number of centres."""
         return len(self.Pi)
 
-    def extend(self, phi_jc, phi_jj, pi_j, tol=1e-12):
+    def extend(self, phi_jc, phi_jj, pi_j, tol=ROUNDOFF):
         """Append centres ``J``.
 
         Parameters

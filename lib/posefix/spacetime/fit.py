@@ -32,6 +32,7 @@ from scipy.spatial.distance import cdist
 
 from posefix.spacetime.factorization import FactorizationError, FullLU, NullSpaceCholesky
 from posefix.spacetime.rbf import POLY_TERMS, RBFField, kernel, kernel_matrix, normalization, poly_basis
+from posefix.mesh.tolerances import ROUNDOFF
 
 log = logging.getLogger(__name__)
 
@@ -56,7 +57,7 @@ class FitSettings:
     selection: str = "fps"
     update: str = "blocked"
     memory_bytes: float = 8e9
-    pivot_tol: float = 1e-12
+    pivot_tol: float = ROUNDOFF
 
     def selection_key(self):
         """Parameters that determine the sequence of centres (not where it stops)."""

@@ -9,6 +9,8 @@ unfinished vertices take one step at a time, each with its own ``h``). A step is
 
 import numpy as np
 
+from posefix.mesh.tolerances import ROUNDOFF
+
 # Dormand-Prince 5(4) tableau
 _C = np.array([0.0, 1 / 5, 3 / 10, 4 / 5, 8 / 9, 1.0, 1.0])
 _A = [
@@ -70,10 +72,10 @@ def rk45(velocity, X0, *, atol, rtol=1e-9, h0=0.05, sample_times=(0.0, 1.0)):
         X[acc], t[acc], k1[acc] = x5[ok], tt[ok] + hh[ok], k7[ok]   # FSAL: k7 is the next k1
         steps[acc] += 1
         rejected[active[~ok]] += 1
-        _land(acc[(nxt[acc] < len(times)) & (t[acc] >= target[ok] - 1e-12)], X, t, times, (samples, nxt))
+        _land(acc[(nxt[acc] < len(times)) & (t[acc] >= target[ok] - ROUNDOFF)], X, t, times, (samples, nxt))
         factor = np.clip(0.9 * np.maximum(err, 1e-10) ** -0.2, 0.2, 5.0)
         h[active] = hh * np.where(ok, factor, np.minimum(factor, 1.0))
-        done = (t >= 1.0 - 1e-12) | (steps + rejected >= MAX_STEPS)
+        done = (t >= 1.0 - ROUNDOFF) | (steps + rejected >= MAX_STEPS)
         active = np.flatnonzero(~done)
     return X, samples, steps, rejected
 

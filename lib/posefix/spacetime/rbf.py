@@ -14,6 +14,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial.distance import cdist
 
+from posefix.mesh.tolerances import TINY
+
 POLY_TERMS = 15
 _PAIRS = [(i, j) for i in range(4) for j in range(i, 4)]
 
@@ -30,7 +32,7 @@ def kernel(r2):
     -------
     ndarray, same shape (one allocation, in-place arithmetic)
     """
-    phi = np.maximum(r2, 1e-300)
+    phi = np.maximum(r2, TINY)
     np.log(phi, out=phi)
     phi *= r2
     phi *= 0.5
