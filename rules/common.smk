@@ -10,7 +10,7 @@ from snakemake.utils import validate
 
 from posefix.workflow import demo
 from posefix.workflow.cli import config_flags, named_options, put_interpreter_first_on_path
-from posefix.workflow.config_check import config_problems
+from posefix.workflow.config_check import config_problems, typed_by_schema
 from posefix.io.errors import InputError
 from posefix.workflow.fingerprint import CodeFingerprints
 from posefix.io.library import Library, discover_library
@@ -19,31 +19,9 @@ from posefix.io.meshes import mesh_file
 from posefix.report.contents import POSE_FIGURES, TIMED_STAGES
 
 
-def _typed(value):
-    """Undo Snakemake's stringification of nested --config values ("5" -> 5, "true" -> True)."""
-    if isinstance(value, dict):
-        return {k: _typed(v) for k, v in value.items()}
-    if isinstance(value, list):
-        return [_typed(v) for v in value]
-    if isinstance(value, str):
-        parsed = yaml.safe_load(value) if value.strip() else value
-        if isinstance(parsed, str):  # YAML 1.1 reads "1e-05" (Python's str of 0.00001) as text
-            try:
-                parsed = float(parsed)
-            except ValueError:
-                pass
-        return parsed if isinstance(parsed, (bool, int, float, list)) else value
-    return value
-
-
-for _section in ("demo", "keyframes", "classify", "constraints", "fit", "integrate", "verify", "downstream",
-                 "skeletal_pose", "repair_medial", "repair_volumetric", "volumetric_pose", "volumetric_animate"):
-    if isinstance(config.get(_section), dict):
-        config[_section] = _typed(config[_section])
-if isinstance(config.get("baselines"), str):  # --config baselines=medial, baselines=[] or baselines=a,b
-    _value = config["baselines"].strip()
-    config["baselines"] = yaml.safe_load(_value) if _value.startswith("[") else [b for b in _value.split(",") if b]
-_problems = config_problems(config, yaml.safe_load((Path(workflow.basedir) / "schemas" / "config.schema.yaml").read_text()))
+SCHEMA = yaml.safe_load((Path(workflow.basedir) / "schemas" / "config.schema.yaml").read_text())
+config.update(typed_by_schema(dict(config), SCHEMA))  # --config leaves text inside nested values
+_problems = config_problems(config, SCHEMA)
 if _problems:  # one line per problem, naming the key; no schema dump
     sys.exit("\n".join(f"posefix: error: config: {p}" for p in _problems))
 validate(config, "../schemas/config.schema.yaml")  # fills in the schema's defaults

@@ -29,3 +29,20 @@ def test_every_problem_is_one_line_naming_its_key():
         "keyframes.count: 1 is less than the minimum of 2",
         "keyframs: unknown key (did you mean 'keyframes'?)",
     ]
+
+
+def test_text_from_the_command_line_takes_the_schema_types_at_its_place():
+    import yaml
+    from pathlib import Path
+    from posefix.workflow.config_check import typed_by_schema
+    schema = yaml.safe_load((Path(__file__).parents[2] / "schemas" / "config.schema.yaml").read_text())
+    given = {"baselines": "medial,contact", "poses": "a,b",  # what Snakemake's --config leaves as text
+             "downstream": {"alphas": ["1.0"], "k_bend": ["1e-05", "0.01"], "baselines": "true", "max_iters": "20"},
+             "classify": {"exclude": {"demo-01": ["3", "4"], "demo-02": "ids.txt"}, "contact": "0"},
+             "skeletal_pose": {"rig": "null", "mesh": "me.obj"}, "fit": {"threads": 2}}
+    assert typed_by_schema(given, schema) == {
+        "baselines": ["medial", "contact"], "poses": "a,b",
+        "downstream": {"alphas": [1.0], "k_bend": [1e-05, 0.01], "baselines": True, "max_iters": 20},
+        "classify": {"exclude": {"demo-01": [3, 4], "demo-02": "ids.txt"}, "contact": 0.0},
+        "skeletal_pose": {"rig": None, "mesh": "me.obj"}, "fit": {"threads": 2}}
+    assert typed_by_schema({"fit": {"threads": "two"}}, schema) == {"fit": {"threads": "two"}}  # the check names it

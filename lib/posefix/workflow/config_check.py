@@ -7,6 +7,9 @@ own messages name the key only in a schema dump many lines below (``1 is less th
 import difflib
 
 import jsonschema
+import yaml
+
+_BOOLEANS = {"true": True, "yes": True, "on": True, "false": False, "no": False, "off": False}
 
 
 def config_problems(config, schema):
@@ -24,6 +27,83 @@ def config_problems(config, schema):
     for error in validator.iter_errors(config):
         lines += _describe(error)
     return sorted(set(lines))
+
+
+def typed_by_schema(value, schema):
+    """``value`` with the text scalars that Snakemake's ``--config`` leaves inside nested values turned into the
+    types ``schema`` allows there.
+
+    Snakemake reads ``--config section={'key': 5}`` with YAML's base loader: every scalar inside is text. Each text
+    scalar becomes, in this order, the first of the schema's types at its place that reads it: null (``null``, ``~``),
+    boolean (``true``/``false``, ``yes``/``no``, ``on``/``off``), integer, number, array (``[a, b]`` or ``a,b``);
+    otherwise it stays text (and the schema check names it when text is not allowed there). Values that are not text
+    (config.yaml's, Snakemake's typed top-level ones) are kept.
+
+    Parameters
+    ----------
+    value : object
+        A config value (a dict for the whole config).
+    schema : dict
+        The JSON schema at the same place.
+
+    Returns
+    -------
+    object
+
+    Examples
+    --------
+    >>> schema = {"properties": {"fit": {"properties": {"tol": {"type": "number"}, "opencl": {"type": "boolean"}}},
+    ...                          "baselines": {"type": "array", "items": {"type": "string"}}}}
+    >>> typed_by_schema({"fit": {"tol": "1e-05", "opencl": "false"}, "baselines": "medial,contact"}, schema)
+    {'fit': {'tol': 1e-05, 'opencl': False}, 'baselines': ['medial', 'contact']}
+    """
+    if isinstance(value, (dict, list)):
+        schema = _alternative(schema, "object" if isinstance(value, dict) else "array")
+    if isinstance(value, dict):
+        properties, extra = schema.get("properties", {}), schema.get("additionalProperties")
+        return {k: typed_by_schema(v, properties.get(k, extra if isinstance(extra, dict) else {}))
+                for k, v in value.items()}
+    if isinstance(value, list):
+        return [typed_by_schema(v, schema.get("items", {})) for v in value]
+    if not isinstance(value, str):
+        return value
+    types = _types(schema) + [t for alternative in _alternatives(schema) for t in _types(alternative)]
+    return _read_text(value.strip(), types, schema)
+
+
+def _types(schema):
+    """The JSON type names that ``schema`` names itself (not in its alternatives), a list."""
+    types = schema.get("type", [])
+    return [types] if isinstance(types, str) else list(types)
+
+
+def _alternatives(schema):
+    """The alternatives of ``schema`` (``oneOf``, then ``anyOf``), a list of schemas."""
+    return schema.get("oneOf", []) + schema.get("anyOf", [])
+
+
+def _alternative(schema, kind):
+    """The first alternative of ``schema``'s ``oneOf``/``anyOf`` of JSON type ``kind``, else ``schema``."""
+    return next((alternative for alternative in _alternatives(schema) if kind in _types(alternative)), schema)
+
+
+def _read_text(text, types, schema):
+    """The first reading of ``text`` that one of ``types`` (JSON schema type names, in their order of preference
+    below) allows, or ``text``."""
+    if "null" in types and text in ("null", "~", "None"):
+        return None
+    if "boolean" in types and text.lower() in _BOOLEANS:
+        return _BOOLEANS[text.lower()]
+    for name, kind in (("integer", int), ("number", float)):
+        if name in types:
+            try:
+                return kind(text)
+            except ValueError:
+                pass
+    if "array" in types and "string" not in types:
+        items = yaml.safe_load(text) if text.startswith("[") else [t.strip() for t in text.split(",") if t.strip()]
+        return typed_by_schema(items, schema) if isinstance(items, list) else text
+    return text
 
 
 def _describe(error):
