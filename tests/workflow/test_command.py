@@ -7,7 +7,7 @@ from pathlib import Path
 import pytest
 
 from conftest import QUICK_DOWNSTREAM, icosphere
-from posefix.workflow.command import WORKFLOW, build_parser, snakemake_command
+from posefix.workflow.command import WORKFLOW, build_parser, failure_line, snakemake_command
 from posefix.io.meshes import write_mesh
 
 
@@ -55,3 +55,53 @@ def test_a_failed_run_ends_with_the_posefix_error_line(tmp_path):
     lines = proc.stderr.splitlines()
     assert lines[0].startswith("posefix validate: error:") and "ball-01.obj: line 4: face vertex index 9" in lines[0]
     assert lines[-1].startswith("posefix: Snakemake's full output: posefix-logs/repair-") and len(lines) == 2
+
+
+@pytest.mark.parametrize("args, line", [
+    (["--cores", "0"], "posefix: error: --cores 0: needs at least 1 core"),
+    (["--cores", "-1"], "posefix: error: --cores -1: needs at least 1 core"),
+    (["--profile", "slrum"], "posefix: error: --profile slrum: no such profile (shipped: default, slurm; or give a "
+                             "folder)"),
+])
+def test_arguments_that_cannot_be_right_are_refused_in_one_line_before_anything_runs(tmp_path, args, line):
+    proc = posefix("repair", tmp_path, *args, cwd=tmp_path)
+    assert proc.returncode != 0 and proc.stderr.splitlines() == [line] and proc.stdout == ""
+    assert not (tmp_path / "posefix-logs").exists() and not (tmp_path / ".snakemake").exists()
+
+
+def test_the_report_of_a_library_repaired_under_another_name_goes_to_that_name(tmp_path):
+    report = snakemake_command(build_parser().parse_args(["report", str(tmp_path), "--config", "name=walk-2"]))
+    assert report[-2:] == ["--report", "reports/walk-2/report.html"]
+
+
+@pytest.mark.parametrize("log, line", [
+    ("Building DAG of jobs...\nLockException:\nError: Directory cannot be locked.",
+     "posefix: error: {folder}: another Snakemake run is working in this folder; wait for it to finish (if none is "
+     "running: snakemake --unlock)"),
+    ("posefix fit: step 3\nOSError: [Errno 28] No space left on device: 'results/lion/lion-01/fit.h5'",
+     "posefix: error: no space left on device (OSError: [Errno 28] No space left on device: "
+     "'results/lion/lion-01/fit.h5'); free some disk, then run the same command again"),
+    ("PermissionError: [Errno 13] Permission denied: 'results/demo'",
+     "posefix: error: permission denied (PermissionError: [Errno 13] Permission denied: 'results/demo')"),
+    ("WildcardError in rule validate in file rules/library.smk, line 47:\nWildcards in input files cannot be "
+     "determined from output files: 'pose'", "posefix: error: WildcardError in rule validate in file "
+     "rules/library.smk, line 47:"),
+    ("Building DAG of jobs...\nsomething unexpected", "posefix: error: the run failed before any stage reported "
+                                                     "(see Snakemake's full output below)"),
+])
+def test_a_run_that_fails_before_any_stage_reports_says_why_in_one_line(log, line):
+    assert failure_line(log, "/work/here") == line.format(folder="/work/here")
+
+
+@pytest.mark.pipeline
+def test_a_dry_run_shows_the_jobs_it_would_run(tmp_path):
+    library = tmp_path / "lib"
+    V, F = icosphere(2)
+    write_mesh(library / "ball-reference.obj", V, F)
+    write_mesh(library / "ball-01.obj", V * 1.1, F)
+    proc = posefix("repair", library, "-n", "--config", "baselines=[]", cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    lines = proc.stdout.splitlines()
+    assert lines[0] == "Job stats:" and any(line.split() == ["verify", "1"] for line in lines)
+    assert lines[-1] == "This was a dry-run (flag -n). The order of jobs does not reflect the order of execution."
+    assert not (tmp_path / "results" / "lib" / "ball-01").exists()

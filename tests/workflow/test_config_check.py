@@ -2,10 +2,11 @@
 
 import copy
 
+import pytest
 import yaml
 
 from conftest import ROOT
-from posefix.workflow.config_check import config_problems
+from posefix.workflow.config_check import config_problems, typed_by_schema
 
 SCHEMA = yaml.safe_load((ROOT / "schemas" / "config.schema.yaml").read_text())
 CONFIG = yaml.safe_load((ROOT / "config.yaml").read_text())
@@ -32,10 +33,7 @@ def test_every_problem_is_one_line_naming_its_key():
 
 
 def test_text_from_the_command_line_takes_the_schema_types_at_its_place():
-    import yaml
-    from pathlib import Path
-    from posefix.workflow.config_check import typed_by_schema
-    schema = yaml.safe_load((Path(__file__).parents[2] / "schemas" / "config.schema.yaml").read_text())
+    schema = SCHEMA
     given = {"baselines": "medial,contact", "poses": "a,b",  # what Snakemake's --config leaves as text
              "downstream": {"alphas": ["1.0"], "k_bend": ["1e-05", "0.01"], "baselines": "true", "max_iters": "20"},
              "classify": {"exclude": {"demo-01": ["3", "4"], "demo-02": "ids.txt"}, "contact": "0"},
@@ -46,3 +44,10 @@ def test_text_from_the_command_line_takes_the_schema_types_at_its_place():
         "classify": {"exclude": {"demo-01": [3, 4], "demo-02": "ids.txt"}, "contact": 0.0},
         "skeletal_pose": {"rig": None, "mesh": "me.obj"}, "fit": {"threads": 2}}
     assert typed_by_schema({"fit": {"threads": "two"}}, schema) == {"fit": {"threads": "two"}}  # the check names it
+
+
+@pytest.mark.parametrize("name", ["..", ".", "a/b", ".hidden", "x y", "{p}"])
+def test_a_name_that_is_not_a_plain_folder_name_is_refused_in_one_line(name):
+    assert config_problems({"name": name}, SCHEMA) == [
+        f"name: {name!r} is not a plain name (letters, digits, '.', '_' and '-', not starting with '.')"]
+    assert config_problems({"name": "lion-2.b_1"}, SCHEMA) == []

@@ -19,7 +19,20 @@ from pathlib import Path
 WORKFLOW = Path(__file__).resolve().parents[3]
 """The checkout the package is installed from (``pip install -e``): Snakefile, rules, stages, profiles."""
 
-SHOWN = re.compile(r"^(posefix\b|\d+ of \d+ steps|Nothing to be done)")
+SHOWN = re.compile(r"^(posefix\b|\d+ of \d+ steps|Nothing to be done|This was a dry-run)")
+
+FAILURES = (
+    (re.compile(r"LockException|Directory cannot be locked"),
+     "{folder}: another Snakemake run is working in this folder; wait for it to finish (if none is running: "
+     "snakemake --unlock)"),
+    (re.compile(r"(?P<cause>.*No space left on device.*)"),
+     "no space left on device ({cause}); free some disk, then run the same command again"),
+    (re.compile(r"(?P<cause>.*Permission denied.*)"), "permission denied ({cause})"),
+    (re.compile(r"(?P<cause>(WildcardError|MissingInputException|Missing input files|WorkflowError|"
+                r"SyntaxError|ValueError|KeyError)\b.*)"), "{cause}"),
+)
+"""Snakemake failures that precede or stop the jobs (no stage wrote a posefix line), as one line each: a pattern
+of the log and its message (``folder``: the run's folder; ``cause``: the matched log line)."""
 
 
 def build_parser():
@@ -43,13 +56,37 @@ def snakemake_command(args):
     command = [sys.executable, "-m", "snakemake", "-s", str(WORKFLOW / "Snakefile"),
                "--config", f"library={Path(args.library).resolve()}", *args.config]
     if args.command == "report":
-        name = Path(args.library).resolve().name
-        return command + ["--report", f"reports/{name}/report.html"]
+        return command + ["--report", f"reports/{library_name(args)}/report.html"]
     command += ["--cores", str(args.cores)]
     if args.profile:
-        profile = WORKFLOW / "profiles" / args.profile
-        command += ["--workflow-profile", str(profile if profile.is_dir() else Path(args.profile).resolve())]
-    return command + (["--dry-run"] if args.dry_run else [])
+        command += ["--workflow-profile", str(profile_folder(args.profile))]
+    return command + (["--dry-run", "--quiet", "rules"] if args.dry_run else [])
+
+
+def library_name(args):
+    """The library's name in results/ and reports/: ``name=`` of ``--config`` if given, else the folder's name."""
+    names = [entry.split("=", 1)[1] for entry in args.config if entry.startswith("name=")]
+    return names[-1] if names and names[-1] else Path(args.library).resolve().name
+
+
+def profile_folder(profile):
+    """The folder of a ``--profile``: a name under the workflow's ``profiles/`` or a folder path, (Path)."""
+    shipped = WORKFLOW / "profiles" / profile
+    return shipped if shipped.is_dir() else Path(profile).resolve()
+
+
+def argument_problem(args):
+    """What is wrong with parsed ``args`` before anything runs, one line (str), or None."""
+    if not (WORKFLOW / "Snakefile").is_file():
+        return f"no workflow next to the package ({WORKFLOW}): install it with pip install -e"
+    if not Path(args.library).is_dir():
+        return f"{args.library}: not a folder"
+    if args.command == "repair" and args.cores < 1:
+        return f"--cores {args.cores}: needs at least 1 core"
+    if args.command == "repair" and args.profile and not profile_folder(args.profile).is_dir():
+        shipped = ", ".join(sorted(p.name for p in (WORKFLOW / "profiles").iterdir() if p.is_dir()))
+        return f"--profile {args.profile}: no such profile (shipped: {shipped}; or give a folder)"
+    return None
 
 
 def run(command, log_path):
@@ -61,10 +98,13 @@ def run(command, log_path):
             command, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, errors="replace",
             start_new_session=True) as child:
         try:
+            table = False  # Snakemake's table of the jobs to run, from "Job stats:" to its "total" line
             for line in child.stdout:
                 log.write(line)
-                if SHOWN.match(line):
+                table = table or line.startswith("Job stats:")
+                if table or SHOWN.match(line):
                     print(line, end="", flush=True)
+                table = table and not line.startswith("total")
                 if line.startswith("posefix") and "error:" in line and line not in errors:
                     errors.append(line)
             return child.wait(), errors
@@ -74,18 +114,29 @@ def run(command, log_path):
             return 130, errors
 
 
+def failure_line(log_text, folder):
+    """The one-line cause of a run that failed with no posefix error line, from Snakemake's log (str)."""
+    lines = log_text.splitlines()
+    for pattern, message in FAILURES:
+        for line in lines:
+            match = pattern.search(line)
+            if match:
+                cause = match.groupdict().get("cause", "").strip()
+                return "posefix: error: " + message.format(folder=folder, cause=cause[:300])
+    return "posefix: error: the run failed before any stage reported (see Snakemake's full output below)"
+
+
 def main(argv=None):
     args = build_parser().parse_args(argv)
-    if not (WORKFLOW / "Snakefile").is_file():
-        sys.exit(f"posefix: error: no workflow next to the package ({WORKFLOW}): install it with pip install -e")
-    if not Path(args.library).is_dir():
-        sys.exit(f"posefix: error: {args.library}: not a folder")
+    problem = argument_problem(args)
+    if problem:
+        sys.exit(f"posefix: error: {problem}")
     log_path = Path("posefix-logs") / time.strftime(f"{args.command}-%Y%m%d-%H%M%S.log")
     code, errors = run(snakemake_command(args), log_path)
     if code == 130:
         print("posefix: interrupted; run the same command again to go on", file=sys.stderr)
     elif code != 0:
-        print("".join(errors) if errors else "posefix: the run failed (no posefix error line, see the log)",
+        print("".join(errors) if errors else failure_line(log_path.read_text(errors="replace"), Path.cwd()),
               end="" if errors else "\n", file=sys.stderr)
         print(f"posefix: Snakemake's full output: {log_path}", file=sys.stderr)
     sys.exit(code)

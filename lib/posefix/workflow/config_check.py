@@ -118,6 +118,9 @@ def _describe(error):
         return [f"{path}: {error.instance!r} is not one of {', '.join(map(repr, error.validator_value))}"]
     if error.validator == "type":
         return [f"{path}: {error.instance!r} is not of type {error.validator_value}"]
+    if error.validator == "pattern":
+        return [f"{path}: {error.instance!r} is not a plain name (letters, digits, '.', '_' and '-', not starting "
+                "with '.')"]
     return [f"{path or '(top level)'}: {error.message}"]
 
 
