@@ -97,6 +97,8 @@ def _library():
 
 LIBRARY = _library()
 POSES = [p.name for p in LIBRARY.poses]
+for _path, _cause in LIBRARY.refused if workflow.is_main_process else ():  # one line each; the others go on
+    print(f"posefix: warning: {_path}: {_cause}; left out of the library", file=sys.stderr)
 _unknown = sorted(set(config["classify"]["exclude"]) - set(POSES))
 if _unknown:
     sys.exit(f"posefix: error: classify.exclude names pose(s) not in the library: {', '.join(_unknown)}")

@@ -1,5 +1,6 @@
 """The Snakemake workflow end to end: demo library, determinism, bad libraries, the lion poses."""
 
+import json
 import subprocess
 import sys
 
@@ -7,7 +8,7 @@ import h5py
 import numpy as np
 import pytest
 
-from conftest import ROOT, shared_library, with_quick_downstream
+from conftest import ROOT, icosphere, shared_library, with_quick_downstream
 from posefix.workflow.demo import POSES
 from posefix.io.meshes import write_mesh
 
@@ -48,7 +49,6 @@ def test_demo_run_produces_every_artifact(demo_run):
 
 def test_demo_poses_are_repaired(demo_run):
     """S0's promise on the demo library: no new intersection, untouched regions reproduced."""
-    import json
     from posefix.io.meshes import read_mesh
     summary = json.loads((demo_run / "reports" / "demo" / "summary.json").read_text())
     assert [e["pose"] for e in summary["poses"]] == [p.name for p in POSES]
@@ -85,7 +85,6 @@ def test_demo_poses_are_repaired(demo_run):
 def test_the_report_compares_s0_with_the_baseline_repairs(demo_run, name):
     """summary.json's baselines.<name>: the artifact's numbers and its deviation over S0's V_C, measured as
     S0's; renders.png has a panel per baseline."""
-    import json
     from matplotlib.image import imread
     from posefix.workflow.timings import benchmark_seconds
     from posefix.verify.deviation import deviation
@@ -142,7 +141,6 @@ def test_report_has_every_section_and_non_blank_figures(demo_run):
     every pose, its six figures (captioned PNGs that decode and are not blank)."""
     import base64
     import io
-    import json
     from html.parser import HTMLParser
     from matplotlib.image import imread
 
@@ -206,7 +204,6 @@ def test_rerun_is_a_no_op_and_outputs_are_deterministic(demo_run, tmp_path):
 
 def test_missing_reference_fails_at_startup(tmp_path):
     lib = tmp_path / "noref"
-    from conftest import icosphere
     V, F = icosphere(1)
     write_mesh(lib / "a.obj", V, F)
     proc = snakemake(tmp_path, "--config", f"library={lib}")
@@ -236,7 +233,6 @@ def _check_repaired_library(work, lib, name):
     """Repaired files keep the input's faces; fewer intersections than the target; V_C reproduced
     within 1e-3 d on average and 5e-3 d at most; new intersecting faces only inside regions copied
     from the target where key frames pass through each other (issue 4's acceptance)."""
-    import json
     from posefix.io.meshes import read_mesh
     summary = json.loads((work / "reports" / name / "summary.json").read_text())
     for e in summary["poses"]:
@@ -268,7 +264,6 @@ def test_nested_config_overrides_reach_the_stages(tmp_path):
 def test_author_a_library_from_the_demo_rig_and_repair_it(tmp_path):
     """`snakemake skeletal_pose` (S1: the demo rig -> <pose>-ssd/-variational/-flow), then the S0 repair of one of them.
     Called by its name before 2026-12 (`author`), which still works for a release and says the new one."""
-    import json
     proc = snakemake(tmp_path, "author", "--config", "skeletal_pose={'max_iters': 20}")
     assert proc.returncode == 0, proc.stderr[-3000:]
     assert "posefix: rule 'author' is now 'skeletal_pose'" in proc.stderr
@@ -288,7 +283,6 @@ def test_author_a_library_from_the_demo_rig_and_repair_it(tmp_path):
 def test_author_a_library_from_the_demo_pose_script_and_repair_it(tmp_path):
     """`snakemake volumetric_pose` (S4: the demo pose script -> vol-bend, vol-fold, vol-twist), then the S0
     repair of the folded one, with the baseline repairs beside it."""
-    import json
     proc = snakemake(tmp_path, "volumetric_pose", "--config", "volumetric_pose={'tet_vertices': 400}")
     assert proc.returncode == 0, proc.stderr[-3000:]
     library = tmp_path / "data" / "authored" / "demo-limb-volumetric"
@@ -305,7 +299,6 @@ def test_author_a_library_from_the_demo_pose_script_and_repair_it(tmp_path):
 def test_animate_a_library_from_the_demo_markers_and_repair_it(tmp_path):
     """`snakemake volumetric_animate` (S4 §3.2: 8 markers, 13 frames of the demo limb bending) gives a pose
     library of the reference's faces and vertex order that the repair workflow reads."""
-    import json
     from posefix.io.meshes import read_mesh
     proc = snakemake(tmp_path, "volumetric_animate", "--config", "volumetric_animate={'tet_vertices': 400}")
     assert proc.returncode == 0, proc.stderr[-3000:]
@@ -322,3 +315,27 @@ def test_animate_a_library_from_the_demo_markers_and_repair_it(tmp_path):
     assert proc.returncode == 0, proc.stderr[-3000:]
     entry = json.loads((tmp_path / "reports" / "demo-limb-markers" / "summary.json").read_text())["poses"][0]
     assert entry["pose"] == "demo-limb-markers-0012" and entry["intersecting_faces"]["repaired_new"] == 0
+
+
+def test_files_that_cannot_be_poses_are_left_out_alone_and_the_others_repaired(tmp_path):
+    """A link to nowhere, a loop of links and braces in a name: one line each, and the good pose is repaired."""
+    library = tmp_path / "lib"
+    V, F = icosphere(2)
+    write_mesh(library / "ball-reference.obj", V, F)
+    write_mesh(library / "ball-01.obj", V * [1.2, 1.0, 0.9], F)
+    write_mesh(library / "walk{2}.obj", V * 1.1, F)
+    (library / "gone.obj").symlink_to(tmp_path / "nowhere.obj")
+    (library / "loop.obj").symlink_to(library / "loop.obj")
+    proc = snakemake(tmp_path, "--config", f"library={library}", "baselines=[]")
+    assert proc.returncode == 0 and "Traceback" not in proc.stderr, proc.stderr[-3000:]
+    warnings = [line for line in proc.stderr.splitlines() if line.startswith("posefix: warning:")]
+    assert warnings == [
+        f"posefix: warning: {library / 'gone.obj'}: a link to {tmp_path / 'nowhere.obj'}: No such file or directory; "
+        "left out of the library",
+        f"posefix: warning: {library / 'loop.obj'}: a link to {library / 'loop.obj'}: Too many levels of symbolic "
+        "links; left out of the library",
+        f"posefix: warning: {library / 'walk{2}.obj'}: braces in the file name (Snakemake's rules read them as "
+        "wildcards): rename the file; left out of the library"]
+    summary = json.loads((tmp_path / "reports" / "lib" / "summary.json").read_text())
+    assert [e["pose"] for e in summary["poses"]] == ["ball-01"]
+    assert (tmp_path / "results" / "lib" / "repaired" / "ball-01.obj").exists()

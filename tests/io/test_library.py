@@ -6,6 +6,7 @@ naming the file and the problem, and no output file left behind.
 
 import gzip
 import shutil
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -197,10 +198,33 @@ def test_vertex_id_files(tmp_path):
         read_vertex_ids(tmp_path / "bad.txt")
 
 
-def test_broken_symlink_is_reported(tmp_path, library):
+def test_files_that_cannot_be_poses_are_left_out_alone_with_their_cause(tmp_path, library):
+    folder, V, F = library
+    (folder / "c.obj").symlink_to(tmp_path / "nowhere.obj")  # a link to nowhere
+    (folder / "d.obj").symlink_to(folder / "d.obj")  # a loop
+    write_mesh(folder / "walk{2}.obj", V, F)  # Snakemake would read {2} as a wildcard
+    lib = discover_library(folder)
+    assert [p.name for p in lib.poses] == ["a", "b"]
+    assert {Path(path).name: cause for path, cause in lib.refused} == {
+        "c.obj": f"a link to {tmp_path / 'nowhere.obj'}: No such file or directory",
+        "d.obj": f"a link to {folder / 'd.obj'}: Too many levels of symbolic links",
+        "walk{2}.obj": "braces in the file name (Snakemake's rules read them as wildcards): rename the file"}
+    run_stage("validate", "--library", folder, "--out", tmp_path / "library.h5")  # the others validate
+
+
+def test_a_reference_that_cannot_be_read_stops_discovery_naming_it(tmp_path, library):
     folder, _, _ = library
-    (folder / "c.obj").symlink_to(tmp_path / "nowhere.obj")
-    _expect_error(tmp_path, folder, "c.obj", "cannot be opened")
+    (folder / "sphere-reference.obj").unlink()
+    (folder / "sphere-reference.obj").symlink_to(tmp_path / "gone.obj")
+    with pytest.raises(InputError, match="sphere-reference.obj: a link to .*gone.obj: No such file or directory"):
+        discover_library(folder)
+    for name in ("a.obj", "b.off"):
+        (folder / name).unlink()
+    (folder / "a{1}.obj").write_text("")
+    (folder / "sphere-reference.obj").unlink()
+    write_mesh(folder / "sphere-reference.obj", *icosphere(1))
+    with pytest.raises(InputError, match=r"no target poses besides the reference; a\{1\}.obj: braces"):
+        discover_library(folder)
 
 
 def test_unicode_file_names(tmp_path, library):

@@ -7,6 +7,7 @@ file (or folder) and the problem in one line.
 
 import os
 import re
+import stat
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -19,9 +20,9 @@ from posefix.io.errors import InputError
 from posefix.io.meshes import MESH_SUFFIXES, MeshFile, mesh_file, read_mesh
 
 DEGENERATE_AREA_REL = 1e-14
+"""Reference faces with area below this times the squared bbox diagonal count as zero-area."""
 SEAM_APART_REL = 1e-3
 """Vertices split along a seam in the reference must stay within this times its mean edge length in a pose."""
-"""Reference faces with area below this times the squared bbox diagonal count as zero-area."""
 
 
 MIN_REFERENCE_VERTICES = 15
@@ -37,6 +38,8 @@ class Library:
     name: str
     reference: MeshFile
     poses: tuple
+    refused: tuple = ()
+    """``(path, cause)`` of the mesh files left out of the library, one pair each (:func:`file_problem`)."""
 
     def pose(self, name):
         """The :class:`~posefix.io.meshes.MeshFile` of the pose called ``name``."""
@@ -44,6 +47,31 @@ class Library:
             if p.name == name:
                 return p
         raise KeyError(name)
+
+
+def file_problem(path):
+    """Why the mesh file at ``path`` cannot be a pose of a library, one line (str), or None.
+
+    A link to nowhere or a loop of links, something that is not a regular file, an unreadable file, and a file name
+    that Snakemake's rules cannot carry (braces read as wildcards, control characters).
+
+    Examples
+    --------
+    >>> file_problem("walk{2}.obj")
+    "braces in the file name (Snakemake's rules read them as wildcards): rename the file"
+    """
+    name = os.path.basename(path)
+    if "{" in name or "}" in name:
+        return "braces in the file name (Snakemake's rules read them as wildcards): rename the file"
+    if not name.isprintable():
+        return "a control character in the file name: rename the file"
+    try:
+        mode = os.stat(path).st_mode
+    except OSError as exc:
+        return f"a link to {os.readlink(path)}: {exc.strerror}" if os.path.islink(path) else exc.strerror
+    if not stat.S_ISREG(mode):
+        return "not a regular file"
+    return None if os.access(path, os.R_OK) else "not readable (permissions)"
 
 
 def discover_library(folder, reference=None, poses=None, name=None):
@@ -61,11 +89,16 @@ def discover_library(folder, reference=None, poses=None, name=None):
     name : str, optional
         Library name; default: the folder's name.
 
+    Returns
+    -------
+    Library
+        Mesh files that cannot be poses (:func:`file_problem`) are left out, in ``refused``.
+
     Raises
     ------
     InputError
-        Missing folder, no meshes, no or several reference candidates, unknown names,
-        two files with the same pose name, or no target pose.
+        Missing folder, no meshes, no or several reference candidates, unknown names, a reference that cannot be
+        read (:func:`file_problem`), two files with the same pose name, or no target pose.
     """
     folder = Path(folder)
     if not folder.is_dir():
@@ -88,10 +121,26 @@ def discover_library(folder, reference=None, poses=None, name=None):
         chosen = [_lookup(by_name, p) for p in poses]
     else:
         chosen = files
-    chosen = tuple(sorted({f.name: f for f in chosen if f.name != ref.name}.values(), key=lambda f: f.name))
-    if not chosen:
-        raise InputError(folder, "no target poses besides the reference")
-    return Library(folder=str(folder), name=name or folder.resolve().name, reference=ref, poses=chosen)
+    chosen, refused = _usable_poses(folder, ref, chosen)
+    return Library(folder=str(folder), name=name or folder.resolve().name, reference=ref, poses=chosen,
+                   refused=refused)
+
+
+def _usable_poses(folder, ref, chosen):
+    """``(poses, refused)``: the files of ``chosen`` but the reference that can be poses, in name order, and
+    ``(path, cause)`` of those that cannot (:func:`file_problem`); InputError if the reference cannot or no pose
+    is left."""
+    problem = file_problem(ref.path)
+    if problem:
+        raise InputError(ref.path, problem)
+    causes = {f.path: file_problem(f.path) for f in chosen}
+    refused = tuple((path, cause) for path, cause in causes.items() if cause)
+    poses = tuple(sorted({f.name: f for f in chosen if f.name != ref.name and not causes[f.path]}.values(),
+                         key=lambda f: f.name))
+    if not poses:
+        raise InputError(folder, "no target poses besides the reference" + "".join(
+            f"; {os.path.basename(path)}: {cause}" for path, cause in refused))
+    return poses, refused
 
 
 def _lookup(by_name, key):
