@@ -87,6 +87,16 @@ def test_nan_coordinates(tmp_path, library):
     _expect_error(tmp_path, folder, "a.obj", "NaN or infinite", "vertex 5")
 
 
+def test_a_vertex_far_outside_the_reference_is_one_line_naming_it(tmp_path, library):
+    folder, V, F = library
+    far = V + 50.0 * np.ptp(V, axis=0)  # a pose may move far (50 diagonals here) ...
+    write_mesh(folder / "a.obj", far, F)
+    run_stage("validate", "--library", folder, "--out", tmp_path / "ok.h5")
+    far[7] = [1e30, 0.0, 0.0]  # ... but not a vertex at 1e30 (a typo, a unit mismatch)
+    write_mesh(folder / "a.obj", far, F)
+    _expect_error(tmp_path, folder, "a.obj", "vertex 7 [1e+30, ", "bounding-box diagonals of the reference")
+
+
 def test_infinite_coordinates(tmp_path, library):
     folder, V, F = library
     bad = V.copy()

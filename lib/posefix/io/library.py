@@ -25,6 +25,10 @@ SEAM_APART_REL = 1e-3
 """Vertices split along a seam in the reference must stay within this times its mean edge length in a pose."""
 
 
+FAR_REL = 100.0
+"""A pose vertex farther than this many of the reference's bbox diagonals from the reference's bbox centre is an
+error of the file (a pose moves its parts within a few diagonals; the fit would fail much later on it)."""
+
 MIN_REFERENCE_VERTICES = 15
 """Fewest vertices of a usable reference: the terms of the space-time method's quadratic space-time polynomial
 (``posefix.spacetime.rbf.POLY_TERMS``; the I/O layer imports no method, a test checks that they agree)."""
@@ -181,7 +185,8 @@ def check_reference(path, V, F):
 
 
 def check_pose(path, V, F, V_ref, F_ref):
-    """Raise :class:`InputError` unless a pose matches the reference's vertex count and faces."""
+    """Raise :class:`InputError` unless a pose matches the reference's vertex count and faces and lies within
+    :data:`FAR_REL` bounding-box diagonals of it."""
     if len(V) != len(V_ref):
         raise InputError(path, f"{len(V)} vertices, the reference has {len(V_ref)}")
     if F.shape != F_ref.shape:
@@ -191,6 +196,12 @@ def check_pose(path, V, F, V_ref, F_ref):
         f = int(np.argmax(differ))
         raise InputError(path, f"face array differs from the reference ({differ.sum()} faces; first: face {f} "
                                f"{F[f].tolist()} vs {F_ref[f].tolist()})")
+    centre, d = 0.5 * (V_ref.min(axis=0) + V_ref.max(axis=0)), bbox_diagonal(V_ref)
+    far = np.linalg.norm(V - centre, axis=1) / d
+    if far.max(initial=0.0) > FAR_REL:
+        v = int(np.argmax(far))
+        raise InputError(path, f"vertex {v} {V[v].tolist()} is {far[v]:.3g} bounding-box diagonals of the reference "
+                               f"from its centre (at most {FAR_REL:g}): a typo or a unit mismatch?")
 
 
 def read_reference(path):
