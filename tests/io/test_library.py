@@ -256,3 +256,19 @@ def test_unwritable_output_is_one_line(tmp_path, library):
 
 def test_the_smallest_reference_is_the_space_time_polynomials_terms():
     assert MIN_REFERENCE_VERTICES == POLY_TERMS
+
+
+def test_a_reference_that_intersects_itself_is_allowed_and_said_with_its_count(tmp_path):
+    V, F = icosphere(1)
+    V2, F2 = np.vstack([V, V + [0.5, 0.0, 0.0]]), np.vstack([F, F + len(V)])  # two overlapping balls
+    folder = tmp_path / "lib"
+    write_mesh(folder / "balls-reference.obj", V2, F2)
+    write_mesh(folder / "a.obj", V2 * 1.1, F2)
+    proc = run_stage("validate", "--library", folder, "--reference-only", "--out", tmp_path / "reference.h5")
+    warnings = [line.split(" ", 1)[1] for line in proc.stderr.splitlines() if ": warning: " in line]
+    import h5py
+    with h5py.File(tmp_path / "reference.h5", "r") as fh:
+        faces = int(fh["metrics"].attrs["reference_intersecting_faces"])
+    assert 0 < faces < len(F2) and warnings == [
+        f"posefix validate: warning: {folder / 'balls-reference.obj'}: the reference has {faces} intersecting faces: "
+        "allowed (the repairs tolerate them and form no new intersection)"]

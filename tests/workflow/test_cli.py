@@ -47,12 +47,14 @@ def test_library_loggers_reach_the_stage_log_file(tmp_path, capsys, posefix_logg
     logging.getLogger("posefix.verify.sequence").info("from the library")
     logging.getLogger("posefix.downstream.gauss_newton").debug("detail")
     log.info("from the stage")
+    log.warning("look")
     for handler in posefix_logger.handlers:
         handler.flush()
     text = (tmp_path / "demo.log").read_text()
     assert "posefix demo: from the library" in text and "posefix demo: detail" in text
     err = capsys.readouterr().err
     assert "from the stage" in err and "detail" not in err  # DEBUG only in the file
+    assert "posefix demo: warning: look" in err and "posefix demo: warning: look" in text  # the posefix command shows it
     assert log.name == "posefix.stages.demo"
 
 

@@ -84,17 +84,23 @@ def configure_logging(stage, path=None):
     root.setLevel(logging.DEBUG)
     root.handlers.clear()
     root.propagate = False
-    fmt = logging.Formatter(f"%(asctime)s posefix {stage}: %(message)s", datefmt="%H:%M:%S")
+    fmt = logging.Formatter(f"%(asctime)s posefix {stage}: %(level)s%(message)s", datefmt="%H:%M:%S")
     console = logging.StreamHandler(sys.stderr)
     console.setLevel(logging.INFO)
-    console.setFormatter(fmt)
-    root.addHandler(console)
-    if path:
-        handler = logging.FileHandler(path, mode="w")
-        handler.setLevel(logging.DEBUG)
+    handlers = [console] + ([logging.FileHandler(path, mode="w")] if path else [])
+    for handler in handlers:
         handler.setFormatter(fmt)
+        handler.addFilter(_level_word)
         root.addHandler(handler)
+    handlers[-1].setLevel(logging.DEBUG if path else logging.INFO)
     return logging.getLogger(f"posefix.stages.{stage}")
+
+
+def _level_word(record):
+    """Logging filter: ``record.level`` is ``"warning: "`` for warnings and above (the posefix command shows those
+    lines on the terminal), empty otherwise; keeps every record."""
+    record.level = "warning: " if record.levelno >= logging.WARNING else ""
+    return True
 
 
 def library_defaults(obj):

@@ -19,7 +19,8 @@ from pathlib import Path
 WORKFLOW = Path(__file__).resolve().parents[3]
 """The checkout the package is installed from (``pip install -e``): Snakefile, rules, stages, profiles."""
 
-SHOWN = re.compile(r"^(posefix\b|\d+ of \d+ steps|Nothing to be done|This was a dry-run)")
+SHOWN = re.compile(r"^(posefix\b|\d+ of \d+ steps|Nothing to be done|This was a dry-run"
+                   r"|[\d:]+ posefix [\w-]+: warning:)")
 
 FAILURES = (
     (re.compile(r"LockException|Directory cannot be locked"),
