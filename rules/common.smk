@@ -10,6 +10,7 @@ from snakemake.utils import validate
 
 from posefix.workflow import demo
 from posefix.workflow.cli import config_flags, named_options, put_interpreter_first_on_path
+from posefix.workflow.command import failed_job_errors
 from posefix.workflow.config_check import config_problems, typed_by_schema
 from posefix.io.errors import InputError
 from posefix.workflow.fingerprint import CodeFingerprints
@@ -46,6 +47,11 @@ RENAMED_RULES = {"author": "skeletal_pose", "author_volumetric": "volumetric_pos
                  "animate_volumetric": "volumetric_animate"}
 """Rules renamed in 2026-12 (old name: new name, so that a rule, its script and its config section share one name);
 the old names stay as aliases for one release and say so."""
+
+
+onerror:  # the posefix error lines of the failed jobs, at the end of the terminal output (plain snakemake too)
+    _text = "".join(Path(p).read_text(errors="replace") for p in (log if isinstance(log, list) else [log]) if p)
+    print("\n".join(failed_job_errors(_text, Path.cwd())), file=sys.stderr)
 
 
 onstart:

@@ -339,3 +339,20 @@ def test_files_that_cannot_be_poses_are_left_out_alone_and_the_others_repaired(t
     summary = json.loads((tmp_path / "reports" / "lib" / "summary.json").read_text())
     assert [e["pose"] for e in summary["poses"]] == ["ball-01"]
     assert (tmp_path / "results" / "lib" / "repaired" / "ball-01.obj").exists()
+
+
+def test_plain_snakemake_ends_a_failed_run_with_the_posefix_error_lines(tmp_path):
+    """The README's plain `snakemake`: the posefix line of a bad pose comes again after Snakemake's job log, with
+    the good pose repaired (the default profile keeps going)."""
+    library = tmp_path / "lib"
+    V, F = icosphere(2)
+    write_mesh(library / "ball-reference.obj", V, F)
+    write_mesh(library / "ball-01.obj", V * [1.2, 1.0, 0.9], F)
+    (library / "ball-02.obj").write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n")
+    proc = snakemake(tmp_path, "--config", f"library={library}", "baselines=[]")
+    assert proc.returncode != 0
+    line = (f"posefix validate: error: {library / 'ball-02.obj'}: line 4: face vertex index 9 is out of range 1..3 "
+            "(OBJ indices start at 1)")
+    tail = proc.stderr.splitlines()[-8:]
+    assert line in tail and sum(x.startswith("posefix") for x in tail) == 1, "\n".join(tail)
+    assert (tmp_path / "results" / "lib" / "repaired" / "ball-01.obj").exists()

@@ -7,7 +7,7 @@ from pathlib import Path
 import pytest
 
 from conftest import QUICK_DOWNSTREAM, icosphere
-from posefix.workflow.command import WORKFLOW, build_parser, failure_line, snakemake_command
+from posefix.workflow.command import WORKFLOW, build_parser, failed_job_errors, failure_line, snakemake_command
 from posefix.io.meshes import write_mesh
 
 
@@ -105,3 +105,17 @@ def test_a_dry_run_shows_the_jobs_it_would_run(tmp_path):
     assert lines[0] == "Job stats:" and any(line.split() == ["verify", "1"] for line in lines)
     assert lines[-1] == "This was a dry-run (flag -n). The order of jobs does not reflect the order of execution."
     assert not (tmp_path / "results" / "lib" / "ball-01").exists()
+
+
+def test_the_failed_jobs_error_lines_come_from_the_logs_snakemake_names(tmp_path):
+    (tmp_path / "logs").mkdir()
+    (tmp_path / "logs" / "fit.log").write_text("19:00:00 posefix fit: read\nTraceback...\n"
+                                               "posefix fit: error: results/a/constraints.h5: too few\n")
+    (tmp_path / "logs" / "validate.log").write_text("posefix validate: error: lib/b.obj: line 4\n")
+    log = ("Error in rule fit:\n    log: logs/fit.log (check log file(s) for error details)\n"
+           "Error in rule validate:\n    log: logs/validate.log (check log file(s) for error details)\n"
+           "Error in rule fit:\n    log: logs/fit.log (check log file(s) for error details)\n"
+           "Error in rule x:\n    log: logs/missing.log (check log file(s) for error details)\n")
+    assert failed_job_errors(log, tmp_path) == ["posefix fit: error: results/a/constraints.h5: too few",
+                                                "posefix validate: error: lib/b.obj: line 4"]
+    assert failed_job_errors("LockException", tmp_path) == [failure_line("LockException", tmp_path)]

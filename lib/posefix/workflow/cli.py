@@ -49,12 +49,12 @@ def run_stage(parser, main, argv=None):
             main(args, log)
     except InputError as exc:
         log.debug("input error", exc_info=True)
-        print(f"posefix {args.stage}: error: {exc}", file=sys.stderr)
+        _say_error(f"posefix {args.stage}: error: {exc}")
         sys.exit(EXIT_INPUT_ERROR)
     except OSError as exc:  # e.g. an output folder that cannot be created or written
         log.debug("system error", exc_info=True)
         where = f"{exc.filename}: " if exc.filename else ""
-        print(f"posefix {args.stage}: error: {where}{exc.strerror or exc}", file=sys.stderr)
+        _say_error(f"posefix {args.stage}: error: {where}{exc.strerror or exc}")
         sys.exit(1)
     except KeyboardInterrupt:
         print(f"posefix {args.stage}: interrupted; no output written", file=sys.stderr)
@@ -63,6 +63,16 @@ def run_stage(parser, main, argv=None):
         log.debug("unexpected error", exc_info=True)
         raise
     log.info("done in %.2f s", time.perf_counter() - start)
+
+
+def _say_error(line):
+    """Print a stage's one error ``line`` to stderr and write it, as it is, to the stage's log file (where plain
+    ``snakemake`` finds it to repeat it at the end of a failed run)."""
+    print(line, file=sys.stderr)
+    for handler in logging.getLogger("posefix").handlers:
+        if isinstance(handler, logging.FileHandler):
+            handler.stream.write(line + "\n")
+            handler.flush()
 
 
 def configure_logging(stage, path=None):

@@ -127,6 +127,20 @@ def failure_line(log_text, folder):
     return "posefix: error: the run failed before any stage reported (see Snakemake's full output below)"
 
 
+def failed_job_errors(log_text, folder):
+    """The posefix error lines of the jobs that failed, from Snakemake's log (str) and the jobs' log files that it
+    names (relative to ``folder``), once each in order; ``[`` :func:`failure_line` ``]`` when there are none."""
+    lines = []
+    for path in re.findall(r"log: (.+?) \(check log file\(s\) for error details\)", log_text):
+        for candidate in path.split(", "):
+            try:
+                text = (Path(folder) / candidate).read_text(errors="replace")
+            except OSError:
+                continue
+            lines += [line for line in text.splitlines() if re.match(r"posefix [\w-]+: error:", line)]
+    return list(dict.fromkeys(lines)) or [failure_line(log_text, folder)]
+
+
 def main(argv=None):
     args = build_parser().parse_args(argv)
     problem = argument_problem(args)
