@@ -2,6 +2,7 @@
 # posefix is installed in the interpreter that runs Snakemake (the venv's under `make run`).
 import os
 import shlex
+import subprocess
 import sys
 from pathlib import Path
 
@@ -11,6 +12,7 @@ from snakemake.utils import validate
 from posefix.workflow import demo
 from posefix.workflow.cli import config_flags, named_options, put_interpreter_first_on_path
 from posefix.workflow.command import failed_job_errors
+from posefix.workflow.partial_summary import finished_poses, pose_errors
 from posefix.workflow.config_check import config_problems, typed_by_schema
 from posefix.io.errors import InputError
 from posefix.workflow.fingerprint import CodeFingerprints
@@ -47,11 +49,6 @@ RENAMED_RULES = {"author": "skeletal_pose", "author_volumetric": "volumetric_pos
                  "animate_volumetric": "volumetric_animate"}
 """Rules renamed in 2026-12 (old name: new name, so that a rule, its script and its config section share one name);
 the old names stay as aliases for one release and say so."""
-
-
-onerror:  # the posefix error lines of the failed jobs, at the end of the terminal output (plain snakemake too)
-    _text = "".join(Path(p).read_text(errors="replace") for p in (log if isinstance(log, list) else [log]) if p)
-    print("\n".join(failed_job_errors(_text, Path.cwd())), file=sys.stderr)
 
 
 onstart:
@@ -177,3 +174,26 @@ def get_final_output():
         f"{REPORTS}/summary.json",
         f"{REPORTS}/overview.png",
     ]
+
+
+def partial_summary(errors):
+    """After a failed run: the summary and overview of the poses that finished, the others listed with their error
+    line (``errors``: the posefix error lines of the failed jobs); nothing when no pose finished."""
+    required = {p: [f"{RESULTS}/{p}/{a}.h5" for a in ("keyframes", "classify", "verify", "downstream")]
+                + list(baseline_artifacts(p).values()) + [repaired_file(p)] for p in POSES}
+    finished, unfinished = finished_poses(required)
+    if not finished or not unfinished:
+        return
+    failed = [f"--failed={pose}={line}" for pose, line in pose_errors(unfinished, errors).items()]
+    summary = [sys.executable, stage_script("summary"), "--results", RESULTS, "--poses", ",".join(finished),
+               "--baselines", ",".join(BASELINES), "--distortion-limit", str(config["summary"]["distortion_limit"]),
+               *failed, "--out", f"{REPORTS}/summary.json", "--markdown", f"{REPORTS}/summary.md",
+               "--log", f"{RESULTS}/logs/summary.log"]
+    overview = [sys.executable, stage_script("overview"), "--summary", f"{REPORTS}/summary.json",
+                "--png", f"{REPORTS}/overview.png", "--html", f"{REPORTS}/summary.html",
+                "--log", f"{RESULTS}/logs/overview.log"]
+    quiet = {"stdout": subprocess.DEVNULL, "stderr": subprocess.DEVNULL}  # the stages' own logs keep their lines
+    if subprocess.run(summary, **quiet).returncode == 0 and subprocess.run(overview, **quiet).returncode == 0:
+        print(f"posefix: summary of the {len(finished)} poses that finished, {len(unfinished)} listed as failed: "
+              f"{REPORTS}/summary.html", file=sys.stderr)
+

@@ -89,3 +89,10 @@ rule overview:
     shell:
         "python {params.script:q} --summary {input:q} --png {output.png:q} --html {output.html:q}"
         " --log {log:q}"
+
+
+onerror:  # the summary of the poses that finished, then the failed jobs' posefix error lines (plain snakemake too)
+    _text = "".join(Path(p).read_text(errors="replace") for p in (log if isinstance(log, list) else [log]) if p)
+    _errors = failed_job_errors(_text, Path.cwd())
+    partial_summary(_errors)
+    print("\n".join(_errors), file=sys.stderr)

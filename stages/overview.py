@@ -37,7 +37,7 @@ def main(args, log):
         raise InputError(args.summary, f"not a posefix summary.json ({exc})") from None
     with timings.step("figure"):
         write_figure(args.png, library_overview(entries, args.bar, title=f"posefix: {library}"))
-    atomic_write_bytes(args.html, summary_html(library, entries, args.bar).encode())
+    atomic_write_bytes(args.html, summary_html(library, entries, args.bar, summary.get("failed", ())).encode())
     for entry in entries:
         kind, reason = pose_status(entry, args.bar)
         if kind != "ok":

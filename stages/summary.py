@@ -17,7 +17,7 @@ import posefix.workflow.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; r
 
 from posefix.io.artifacts import read_artifact, read_baseline
 from posefix.mesh.distortion import distortion_summary
-from posefix.workflow.cli import library_defaults, run_stage, stage_parser
+from posefix.workflow.cli import library_defaults, named_path, run_stage, stage_parser
 from posefix.io.errors import InputError
 from posefix.io.files import atomic_write_bytes
 from posefix.workflow.timings import benchmark_seconds
@@ -35,6 +35,8 @@ def build_parser():
     parser.add_argument("--markdown", required=True, help="summary.md to write")
     parser.add_argument("--baselines", default="",
                         help="comma-separated baseline repairs to compare (their <pose>/<name>.h5), e.g. medial")
+    parser.add_argument("--failed", type=named_path, action="append", default=[], metavar="POSE=ERROR",
+                        help="a pose that did not finish and its error line (listed apart; the run failed)")
     parser.add_argument("--distortion-limit", type=float, default=library_defaults(distortion_summary)["limit"],
                         help="a face whose edge-length or area ratio exceeds this against both the target and the "
                         "reference is distorted (its pose is flagged 'check')")
@@ -81,8 +83,10 @@ def main(args, log):
     baselines = [b for b in args.baselines.split(",") if b]
     entries = [summarize_pose(args.results, pose, baselines, args.distortion_limit) for pose in poses]
     library = Path(args.results).name
-    atomic_write_bytes(args.out, json.dumps({"library": library, "poses": entries}, indent=1).encode())
-    atomic_write_bytes(args.markdown, summary_markdown(library, entries).encode())
+    failed = [{"pose": pose, "error": error} for pose, error in args.failed]
+    summary = {"library": library, "poses": entries} | ({"failed": failed} if failed else {})
+    atomic_write_bytes(args.out, json.dumps(summary, indent=1).encode())
+    atomic_write_bytes(args.markdown, summary_markdown(library, entries, failed).encode())
     for e in entries:
         log.info("%s: new intersecting faces %d, deviation V_C mean %.2g max %.2g, %.1f s", e["pose"],
                  e["intersecting_faces"]["repaired_new"], e["deviation"]["constrained_mean"],

@@ -343,7 +343,7 @@ def test_files_that_cannot_be_poses_are_left_out_alone_and_the_others_repaired(t
 
 def test_plain_snakemake_ends_a_failed_run_with_the_posefix_error_lines(tmp_path):
     """The README's plain `snakemake`: the posefix line of a bad pose comes again after Snakemake's job log, with
-    the good pose repaired (the default profile keeps going)."""
+    the good pose repaired (the default profile keeps going) and in the summary, the bad one listed apart."""
     library = tmp_path / "lib"
     V, F = icosphere(2)
     write_mesh(library / "ball-reference.obj", V, F)
@@ -354,5 +354,10 @@ def test_plain_snakemake_ends_a_failed_run_with_the_posefix_error_lines(tmp_path
     line = (f"posefix validate: error: {library / 'ball-02.obj'}: line 4: face vertex index 9 is out of range 1..3 "
             "(OBJ indices start at 1)")
     tail = proc.stderr.splitlines()[-8:]
-    assert line in tail and sum(x.startswith("posefix") for x in tail) == 1, "\n".join(tail)
+    assert line in tail, "\n".join(tail)
     assert (tmp_path / "results" / "lib" / "repaired" / "ball-01.obj").exists()
+    summary = json.loads((tmp_path / "reports" / "lib" / "summary.json").read_text())  # of the pose that finished
+    assert [e["pose"] for e in summary["poses"]] == ["ball-01"]
+    assert summary["failed"] == [{"pose": "ball-02", "error": line}]
+    assert "ball-02</b>: posefix validate: error: " in (tmp_path / "reports" / "lib" / "summary.html").read_text()
+    assert "posefix: summary of the 1 poses that finished, 1 listed as failed: reports/lib/summary.html" in tail

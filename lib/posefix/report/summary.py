@@ -136,12 +136,13 @@ def downstream_entry(d, examples=EXAMPLES):
     return entry
 
 
-def summary_markdown(library, entries):
-    """``summary.md`` of a library: one row per pose and the downstream table, str."""
+def summary_markdown(library, entries, failed=()):
+    """``summary.md`` of a library: one row per pose and the downstream table, str; ``failed``: ``{"pose",
+    "error"}`` of the poses that did not finish, listed at the top."""
     head = ("| pose | faces | intersecting: reference / target / keyframes max / repaired | new (in fallback) | "
             "V_C | centres | fit stop | max error / d | max kappa | fit s | integrate s | steps | "
             "deviation V_C mean / max | (integrated) | free mean / max | fallback vertices | total s |")
-    lines = [f"# posefix summary: {library}", "", head,
+    lines = [f"# posefix summary: {library}", ""] + failed_markdown(failed) + [head,
              "|---|---:|---|---|---:|---:|---|---:|---:|---:|---:|---:|---|---|---|---:|---:|"]
     lines += [_markdown_row(e) for e in entries]
     backends = sorted({f"{e['integrate']['backend']} ({e['integrate']['device']})" for e in entries})
@@ -156,6 +157,14 @@ def summary_markdown(library, entries):
               "reduction over the settings where both converged."]
     lines += comparison_markdown(entries)
     return "\n".join(lines) + "\n"
+
+
+def failed_markdown(failed):
+    """Lines of ``summary.md`` that list the poses that did not finish, ``failed``: ``{"pose", "error"}`` each."""
+    if not failed:
+        return []
+    return [f"**{len(failed)} pose(s) did not finish** (the table has the others):", "",
+            *(f"- {f['pose']}: {f['error']}" for f in failed), ""]
 
 
 def _markdown_row(e):

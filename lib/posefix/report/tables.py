@@ -229,8 +229,18 @@ COLUMNS = (
 )
 
 
-def summary_html(library, entries, bar=DEVIATION_BAR):
-    """A self-contained HTML page with the library's table, rows coloured by :func:`pose_status`, str."""
+def _failed_html(failed):
+    """The list of the poses that did not finish (``{"pose", "error"}`` each), HTML; empty when none."""
+    if not failed:
+        return ""
+    items = "".join(f"<li><b>{html.escape(f['pose'])}</b>: {html.escape(f['error'])}</li>" for f in failed)
+    return (f'<p style="background:{STATUS_COLORS["check"]}">{len(failed)} pose(s) did not finish (the table has '
+            f"the others):</p><ul>{items}</ul>")
+
+
+def summary_html(library, entries, bar=DEVIATION_BAR, failed=()):
+    """A self-contained HTML page with the library's table, rows coloured by :func:`pose_status`, str; ``failed``:
+    ``{"pose", "error"}`` of the poses that did not finish, listed above the table."""
     counts = {}
     rows = []
     for entry in entries:
@@ -244,7 +254,7 @@ def summary_html(library, entries, bar=DEVIATION_BAR):
     return (f"<!DOCTYPE html>\n<html><head><meta charset='utf-8'><title>posefix: {html.escape(library)}</title>"
             "<style>body{font-family:sans-serif;font-size:13px}table{border-collapse:collapse}"
             "td,th{border:1px solid #999;padding:3px 6px;text-align:right}th{background:#eee}</style></head><body>"
-            f"<h2>posefix summary: {html.escape(library)}</h2>"
+            f"<h2>posefix summary: {html.escape(library)}</h2>{_failed_html(failed)}"
             f"<p>{len(entries)} poses: {tally}. ok: clean and within the deviation bar; fallback: clean, with "
             f"regions copied from the target or untangled; check: new intersecting faces outside the pass-through "
             f"fallback, a V_C max deviation above {bar:g} of the bbox diagonal, or faces stretched or crushed beyond "
