@@ -2,11 +2,14 @@
 
 Farthest-point greedy centre selection within the worst candidates, blocked Cholesky updates of
 the null-space-projected system (or full LU refactorization), a condition estimate every
-iteration, and a crash-safe checkpoint after every iteration: rerunning after a kill, or with
-another stopping rule on the same constraints, continues from the stored factors and gives the
-same result as an uninterrupted fit. See ``posefix.spacetime.fit`` and ``posefix.spacetime.factorization``.
+iteration, and a crash-safe checkpoint after every iteration: rerunning after a kill continues
+from the stored factors and gives the same result as an uninterrupted fit. The checkpoint is
+removed once fit.h5 is written, unless ``--keep-checkpoint`` (then a rerun with another stopping
+rule on the same constraints continues from it too). See ``posefix.spacetime.fit`` and
+``posefix.spacetime.factorization``.
 """
 
+import argparse
 import json
 from pathlib import Path
 
@@ -44,15 +47,6 @@ HISTORY = {
     "seconds_solve": ("s", "solve for weights and polynomial per iteration, (I,) float64"),
     "seconds_condition": ("s", "condition estimate per iteration, (I,) float64"),
 }
-FACTORS = {
-    "pi_p": "polynomial basis at the 15 P-centres, (15, 15)",
-    "phi_pp": "kernel among the P-centres, (15, 15)",
-    "G": "null-space basis Pi_P^-T Pi_R^T, (15, n-15)",
-    "H": "kernel between all centres and the P-centres, (n, 15)",
-    "Pi": "polynomial basis at the centres, (n, 15)",
-    "S": "off-diagonal part of a block row of the Cholesky factor of B, (m_k, r_k)",
-    "L": "diagonal block of the Cholesky factor of B (lower triangular), (m_k, m_k)",
-}
 
 
 def build_parser():
@@ -60,6 +54,9 @@ def build_parser():
     parser.add_argument("--constraints", required=True, help="constraints.h5 of the pose")
     parser.add_argument("--out", required=True, help="fit.h5 to write")
     parser.add_argument("--checkpoint", default=None, help="checkpoint folder (default: <out> with .checkpoint)")
+    parser.add_argument("--keep-checkpoint", action=argparse.BooleanOptionalAction, default=False,
+                        help="keep the checkpoint once the fit is written: a rerun with another --eps-rel or "
+                        "--max-centers continues from it (else it starts over; 64 MB per lion pose)")
     defaults = library_defaults(FitSettings)
     parser.add_argument("--eps-rel", type=float, default=1e-4, help="stop at max error < eps_rel * bbox diagonal")
     parser.add_argument("--eps-rms-rel", type=float, default=0.0,
@@ -112,13 +109,11 @@ def main(args, log):
     log.info("stopped (%s) at %d centres: max error %.3g d, rms %.3g d, max kappa %.3g", reason, fit.n,
              last["max_error"] / d, last["rms_error"] / d, max(r["condition"] for r in fit.history))
     history = {f"history/{k}": np.array([r[k] for r in fit.history]) for k in HISTORY}
-    factors = {f"factors/{k[len('solver/'):]}": v for k, v in fit.state().items() if k.startswith("solver/")}
-    docs = dict(DOCS, **{f"history/{k}": v for k, v in HISTORY.items()},
-                **{k: ("1", FACTORS[k.split("/")[1]] + " float64") for k in factors})
+    docs = dict(DOCS, **{f"history/{k}": v for k, v in HISTORY.items()})
     write_artifact(
         args.out, "fit",
         {"centers": points[fit.order], "center_index": fit.order, "weights": fit.weights, "poly": fit.poly,
-         "shift": fit.shift, "scale": np.float64(fit.scale), "residual": fit.residual, **history, **factors},
+         "shift": fit.shift, "scale": np.float64(fit.scale), "residual": fit.residual, **history},
         params=_settings_dict(settings) | {"eps_rel": args.eps_rel, "eps_rms_rel": args.eps_rms_rel,
                                            "device": args.device},
         inputs=[args.constraints], timings=timings,
@@ -129,6 +124,8 @@ def main(args, log):
                  "resumed_iterations": resumed,
                  "seconds": sum(timings.get(k, 0.0) for k in ("start", "iterate"))},
         docs=docs)
+    if not args.keep_checkpoint:
+        checkpoint.remove(folder)
 
 
 def _settings_dict(settings):

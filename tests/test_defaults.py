@@ -124,7 +124,8 @@ RELATIVE = {
                                   (SkeletalPoser.author, "margin")],
     ("repair_medial", "margin"): [(MedialRepair, "margin"), (medial_repair, "margin")],
 }
-STAGE_ONLY = {("integrate", "device"), ("fit", "device"), ("volumetric_animate", "attach"), ("volumetric_animate", "max_offset")}
+STAGE_ONLY = {("integrate", "device"), ("fit", "device"), ("fit", "keep_checkpoint"), ("volumetric_animate", "attach"),
+              ("volumetric_animate", "max_offset")}
 """Options of a stage with no library counterpart: checked against the stage's default only."""
 WORKFLOW_ONLY = {("demo", "folder"), ("classify", "exclude"), ("integrate", "device"), ("fit", "device"), ("skeletal_pose", "rig"),
                  ("skeletal_pose", "mesh"), ("skeletal_pose", "out"), ("downstream", "baselines"),

@@ -226,6 +226,8 @@ def test_lion_library(tmp_path):
             assert counts[0] == 138 and counts[-1] == target_counts.get(pose, counts[-1])
             assert max(counts[1:-1]) <= max(counts[0], counts[-1])  # no tearing in the key frames
             assert fh["mask"][()].sum() > 0.5 * len(fh["mask"])
+        size = sum(f.stat().st_size for f in (results / pose).rglob("*") if f.is_file())
+        assert size <= 25e6 and not (results / pose / "fit.checkpoint").exists(), (pose, size)  # issue 29: disk
     _check_repaired_library(tmp_path, lib, "lion-poses")
 
 

@@ -128,8 +128,10 @@ def test_fit_stage_killed_and_rerun_continues_to_the_same_result(tmp_path):
     assert not (tmp_path / "fit.h5").exists()
     committed = len(json.loads((ckpt / "meta.json").read_text())["history"])
     assert 4 <= committed < 23  # killed mid-fit
-    log = run_stage("fit", *_fit_args(tmp_path / "constraints.h5", tmp_path / "fit.h5", ckpt)).stderr
+    log = run_stage("fit", *_fit_args(tmp_path / "constraints.h5", tmp_path / "fit.h5", ckpt),
+                    "--keep-checkpoint").stderr
     assert "resuming from checkpoint" in log
+    assert not (tmp_path / "whole.ckpt").exists() and (ckpt / "meta.json").exists()  # removed unless kept
     with h5py.File(tmp_path / "fit.h5", "r") as a, h5py.File(tmp_path / "whole.h5", "r") as b:
         assert a["metrics"].attrs["resumed_iterations"] >= 4
         for name in ("center_index", "weights", "poly", "residual", "history/max_error"):

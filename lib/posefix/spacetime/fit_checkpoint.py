@@ -21,6 +21,7 @@ import io
 import json
 import logging
 import os
+import shutil
 from contextlib import contextmanager
 from pathlib import Path
 
@@ -53,6 +54,11 @@ def locked(folder):
             yield
         finally:
             fcntl.flock(handle, fcntl.LOCK_UN)
+
+
+def remove(folder):
+    """Remove the checkpoint ``folder`` (the fit is written; nothing is left to resume)."""
+    shutil.rmtree(folder, ignore_errors=True)
 
 
 def start_or_resume(points, values, settings, folder, key, device=None):
