@@ -11,7 +11,7 @@ from snakemake.utils import validate
 
 from posefix.workflow import demo
 from posefix.workflow.cli import config_flags, named_options, put_interpreter_first_on_path
-from posefix.workflow.command import failed_job_errors
+from posefix.workflow.command import failed_job_errors, recap_line
 from posefix.workflow.partial_summary import finished_poses, pose_errors
 from posefix.workflow.config_check import config_problems, typed_by_schema
 from posefix.io.errors import InputError
@@ -188,10 +188,10 @@ def partial_summary(errors):
     summary = [sys.executable, stage_script("summary"), "--results", RESULTS, "--poses", ",".join(finished),
                "--baselines", ",".join(BASELINES), "--distortion-limit", str(config["summary"]["distortion_limit"]),
                *failed, "--out", f"{REPORTS}/summary.json", "--markdown", f"{REPORTS}/summary.md",
-               "--log", f"{RESULTS}/logs/summary.log"]
+               "--log", f"{RESULTS}/logs/partial-summary.log"]
     overview = [sys.executable, stage_script("overview"), "--summary", f"{REPORTS}/summary.json",
                 "--png", f"{REPORTS}/overview.png", "--html", f"{REPORTS}/summary.html",
-                "--log", f"{RESULTS}/logs/overview.log"]
+                "--log", f"{RESULTS}/logs/partial-overview.log"]
     quiet = {"stdout": subprocess.DEVNULL, "stderr": subprocess.DEVNULL}  # the stages' own logs keep their lines
     if subprocess.run(summary, **quiet).returncode == 0 and subprocess.run(overview, **quiet).returncode == 0:
         print(f"posefix: summary of the {len(finished)} poses that finished, {len(unfinished)} listed as failed: "

@@ -95,4 +95,4 @@ onerror:  # the summary of the poses that finished, then the failed jobs' posefi
     _text = "".join(Path(p).read_text(errors="replace") for p in (log if isinstance(log, list) else [log]) if p)
     _errors = failed_job_errors(_text, Path.cwd())
     partial_summary(_errors)
-    print("\n".join(_errors), file=sys.stderr)
+    print("\n".join(map(recap_line, _errors)), file=sys.stderr)

@@ -7,7 +7,8 @@ from pathlib import Path
 import pytest
 
 from conftest import QUICK_DOWNSTREAM, icosphere
-from posefix.workflow.command import WORKFLOW, build_parser, failed_job_errors, failure_line, snakemake_command
+from posefix.workflow.command import (WORKFLOW, build_parser, failed_job_errors, failure_line, recap_line,
+                                      snakemake_command)
 from posefix.io.meshes import write_mesh
 
 
@@ -119,3 +120,8 @@ def test_the_failed_jobs_error_lines_come_from_the_logs_snakemake_names(tmp_path
     assert failed_job_errors(log, tmp_path) == ["posefix fit: error: results/a/constraints.h5: too few",
                                                 "posefix validate: error: lib/b.obj: line 4"]
     assert failed_job_errors("LockException", tmp_path) == [failure_line("LockException", tmp_path)]
+
+
+def test_the_recap_of_a_failed_job_does_not_repeat_its_error_line():
+    assert recap_line("posefix validate: error: lib/b.obj: line 4") == "posefix: failed in validate: lib/b.obj: line 4"
+    assert recap_line("posefix: error: the run failed") == "posefix: error: the run failed"

@@ -141,6 +141,13 @@ def failed_job_errors(log_text, folder):
     return list(dict.fromkeys(lines)) or [failure_line(log_text, folder)]
 
 
+def recap_line(line):
+    """A failed job's posefix error line as the run's recap shows it at the end (``posefix validate: error: X`` ->
+    ``posefix: failed in validate: X``): the error itself stays the one line that says ``error:``."""
+    match = re.match(r"posefix ([\w-]+): error: (.*)", line)
+    return f"posefix: failed in {match.group(1)}: {match.group(2)}" if match else line
+
+
 def main(argv=None):
     args = build_parser().parse_args(argv)
     problem = argument_problem(args)
