@@ -125,3 +125,17 @@ def test_the_failed_jobs_error_lines_come_from_the_logs_snakemake_names(tmp_path
 def test_the_recap_of_a_failed_job_does_not_repeat_its_error_line():
     assert recap_line("posefix validate: error: lib/b.obj: line 4") == "posefix: failed in validate: lib/b.obj: line 4"
     assert recap_line("posefix: error: the run failed") == "posefix: error: the run failed"
+
+
+def test_the_report_covers_the_poses_of_the_librarys_summary_unless_told(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    library = tmp_path / "walks"
+    library.mkdir()
+    args = build_parser().parse_args(["report", str(library)])
+    assert "poses=" not in " ".join(snakemake_command(args))  # no summary yet: as given
+    (tmp_path / "reports" / "walks").mkdir(parents=True)
+    (tmp_path / "reports" / "walks" / "summary.json").write_text('{"library": "walks", "poses": [{"pose": "a"}, '
+                                                                 '{"pose": "c"}]}')
+    assert snakemake_command(args)[-3:] == ["poses=a,c", "--report", "reports/walks/report.html"]
+    told = build_parser().parse_args(["report", str(library), "--config", "poses=b"])
+    assert [e for e in snakemake_command(told) if e.startswith("poses=")] == ["poses=b"]

@@ -9,6 +9,7 @@ removes stale locks and its default profile reruns incomplete jobs.
 """
 
 import argparse
+import json
 import re
 import signal
 import subprocess
@@ -57,11 +58,25 @@ def snakemake_command(args):
     command = [sys.executable, "-m", "snakemake", "-s", str(WORKFLOW / "Snakefile"),
                "--config", f"library={Path(args.library).resolve()}", *args.config]
     if args.command == "report":
-        return command + ["--report", f"reports/{library_name(args)}/report.html"]
+        return command + report_poses(args) + ["--report", f"reports/{library_name(args)}/report.html"]
     command += ["--cores", str(args.cores)]
     if args.profile:
         command += ["--workflow-profile", str(profile_folder(args.profile))]
     return command + (["--dry-run", "--quiet", "rules"] if args.dry_run else [])
+
+
+def report_poses(args):
+    """``["poses=a,b"]``: the poses of the library's summary.json in the current folder, that the report covers
+    (Snakemake's report needs every job of the run done; a repair of some poses did not run the others), when
+    ``--config`` names no poses itself; else ``[]``."""
+    summary = Path("reports") / library_name(args) / "summary.json"
+    if any(entry.startswith("poses=") for entry in args.config) or not summary.is_file():
+        return []
+    try:
+        poses = [entry["pose"] for entry in json.loads(summary.read_text())["poses"]]
+    except (ValueError, KeyError, TypeError):
+        return []
+    return [f"poses={','.join(poses)}"] if poses else []
 
 
 def library_name(args):
