@@ -124,6 +124,19 @@ def test_one_large_step_through_a_thin_wall_is_cut_by_ccd():
     assert len(self_intersecting_pairs(r.X, F)) == 0
 
 
+def test_a_step_of_many_edge_lengths_is_checked_in_substeps_up_to_its_first_contact():
+    wall = trimesh.creation.box(extents=[0.02, 4.0, 4.0])  # faces at x = -0.01 and 0.01
+    ball = sphere([-3.0, 0, 0], radius=0.2, subdivisions=2)  # leftmost at x = -3.2, edges about 0.06 long
+    V, F = union((np.asarray(wall.vertices), np.asarray(wall.faces)), ball)
+    solver = ContactSolver(V, F)
+    moving = (np.arange(len(V)) >= len(wall.vertices))[:, None]
+    X1 = V + moving * [5.0, 0.0, 0.0]  # through the wall, a move of 28 mean edge lengths (the wall's are 4 long)
+    assert 5.0 / solver.edge_length > 20
+    step = solver.collision_free_step(V, X1)
+    assert 2.6 / 5.0 * 0.8 < step < 2.8 / 5.0  # the ball's front (x = -2.8) stops before x = -0.01
+    assert solver.collision_free_step(V, V + moving * [2.0, 0.0, 0.0]) == 1.0  # clear of the wall all the way
+
+
 def test_tolerated_primitives_of_one_face():
     F = np.array([[0, 1, 2], [0, 2, 3]])
     E = np.array([[0, 1], [1, 2], [0, 2], [2, 3], [0, 3]])

@@ -112,10 +112,10 @@ def test_the_distortion_metric_flags_the_snap_stretching_a_fold_and_not_the_cont
 
 
 def test_a_finish_that_crushes_the_strip_past_ccd_is_reverted_to_an_intersection_free_sample():
-    """Folded at x = 0.35 the tip's target lies beyond the base: with the smallest barrier distance, one straight
+    """Folded at x = 0.3 the tip's target lies beyond the base: with the smallest barrier distance, one straight
     Newton solve from the flat strip toward the target alone (free goal ``target``) crumples it (zero-area
     triangles, below CCD's precision), and the result is checked and reverted."""
-    V, F, problem = _folded_strip(0.35)
+    V, F, problem = _folded_strip(0.3)
     solver = ContactSolver(V, F, settings=ContactSettings(dhat=2e-4, tolerance=1e-4, max_iterations=40))  # crossed by then
     result = finish_pose(problem, np.stack([V, V]), 1.0, solver, FinishSettings(free_goal="target"))
     assert result.metrics["repaired_new"] == 0 and result.metrics["contact_reverted"]
