@@ -45,6 +45,10 @@ def unwritten(names, patterns):
 def test_help(stage):
     proc = run_stage(stage, "--help")
     assert f"usage: {stage}.py" in proc.stdout and "--threads" in proc.stdout
+    text = " ".join(proc.stdout.split())  # argparse wraps the help
+    for wrong in ("(default: None)", "(default: True)", "(default: False)", "(default: [])"):
+        assert wrong not in text, f"{stage}.py --help: {wrong}"
+    assert not re.search(r"\(default: [^)]*\) \(default:", text), f"{stage}.py --help: a default said twice"
 
 
 @pytest.fixture(scope="module")

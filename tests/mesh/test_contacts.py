@@ -3,6 +3,7 @@
 import numpy as np
 
 from conftest import icosphere
+import posefix.mesh.contacts as contacts_module
 from posefix.mesh.contacts import contact_vertices
 from posefix.spacetime.classification import EXCLUDED_CONTACT, constraint_mask
 
@@ -27,3 +28,14 @@ def test_contacts_flag_close_distant_surfaces_only():
     mask, reasons = constraint_mask(F, len(V), [np.zeros((0, 2), int)] * 2, ring=1, contacts=contacts)
     assert np.array_equal(reasons & EXCLUDED_CONTACT > 0, contacts[1])
     assert not mask[close].any()
+
+
+def test_contacts_looked_at_in_chunks_are_the_same(monkeypatch):
+    # two spheres nearly touching, one moving: their close pairs checked 64 at a time or all at once
+    V1, F1 = icosphere(3)
+    V2, F2 = icosphere(2, centre=(2.02, 0.3, 0.0))
+    V, F = np.vstack([V1, V2]), np.vstack([F1, F2 + len(V1)])
+    frames = np.stack([V + [[k * 0.01, 0.0, 0.0]] * (np.arange(len(V)) < len(V1))[:, None] for k in range(3)])
+    whole = contact_vertices(frames, F, V, distance=0.15, radius=0.5)
+    monkeypatch.setattr(contacts_module, "_CHUNK", 64)
+    assert whole.any() and np.array_equal(contact_vertices(frames, F, V, distance=0.15, radius=0.5), whole)

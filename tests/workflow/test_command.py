@@ -1,5 +1,6 @@
 """The posefix command: the workflow from any folder, the posefix error lines at the end of a failed run."""
 
+import argparse
 import subprocess
 import sys
 from pathlib import Path
@@ -17,6 +18,19 @@ def posefix(*args, cwd):
     script = Path(sys.executable).parent / "posefix"
     command = [str(script)] if script.exists() else [sys.executable, "-m", "posefix.workflow.command"]
     return subprocess.run([*command, *map(str, args)], capture_output=True, text=True, cwd=cwd, timeout=900)
+
+
+def test_help_says_each_default_once_and_in_words():
+    assert "``" not in build_parser().format_help()
+    from posefix.workflow.cli import stage_parser
+    parser = stage_parser("x", "")
+    parser.add_argument("--out", required=True, help="where")
+    parser.add_argument("--align", action=argparse.BooleanOptionalAction, default=True, help="align")
+    parser.add_argument("--poses", default=None, help="poses (default: all)")
+    parser.add_argument("--ring", type=int, default=0, help="rings")
+    text = " ".join(parser.format_help().split())
+    assert "--out OUT where --align" in text and "align (on by default)" in text
+    assert "poses (default: all) --ring" in text and "rings (default: 0)" in text
 
 
 def test_the_snakemake_command_line(tmp_path):
@@ -56,6 +70,7 @@ def test_a_failed_run_ends_with_the_posefix_error_line(tmp_path):
     lines = proc.stderr.splitlines()
     assert lines[0].startswith("posefix validate: error:") and "ball-01.obj: line 4: face vertex index 9" in lines[0]
     assert lines[-1].startswith("posefix: Snakemake's full output: posefix-logs/repair-") and len(lines) == 2
+    assert "error:" not in proc.stdout  # once, on stderr
 
 
 @pytest.mark.parametrize("args, line", [

@@ -27,10 +27,25 @@ from posefix.io.errors import InputError
 EXIT_INPUT_ERROR = 2
 
 
+class StageHelpFormatter(argparse.ArgumentDefaultsHelpFormatter):
+    """``--help`` with each option's default said once, where there is one: none for required options, options
+    without a default or whose help already names it; ``(on by default)`` / ``(off by default)`` for switches."""
+
+    def _get_help_string(self, action):
+        text = (action.help or "").replace(" (default: %(default)s)", "")  # Python 3.11's switches add it
+        if isinstance(action, argparse.BooleanOptionalAction):
+            return f"{text} ({'on' if action.default else 'off'} by default)"
+        default = action.default
+        unsaid = any(default is none for none in (None, argparse.SUPPRESS, False)) or default in ([], "")
+        if action.required or unsaid or "default" in text:
+            return text
+        return f"{text} (default: %(default)s)"
+
+
 def stage_parser(stage, description):
     """An ``argparse`` parser with the options every stage has: ``--threads``, ``--log``."""
     parser = argparse.ArgumentParser(prog=f"{stage}.py", description=description,
-                                     formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+                                     formatter_class=StageHelpFormatter)
     parser.set_defaults(stage=stage)
     parser.add_argument("--threads", type=int, default=1,
                         help="maximum BLAS/OpenMP/OpenCL threads this stage may use")

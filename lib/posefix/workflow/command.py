@@ -38,7 +38,7 @@ of the log and its message (``folder``: the run's folder; ``cause``: the matched
 
 
 def build_parser():
-    parser = argparse.ArgumentParser(prog="posefix", description=__doc__.split("\n\n")[0])
+    parser = argparse.ArgumentParser(prog="posefix", description=__doc__.split("\n\n")[0].replace("``", ""))
     commands = parser.add_subparsers(dest="command", required=True)
     repair = commands.add_parser("repair", help="repair a pose library (the whole workflow)")
     report = commands.add_parser("report", help="the HTML report of a repaired library")
@@ -106,11 +106,11 @@ def argument_problem(args):
 
 
 def run(command, log_path):
-    """Run ``command``, its output into ``log_path`` and the lines :data:`SHOWN` onto the terminal: the exit
-    code and the posefix error lines."""
+    """Run ``command``, its output into ``log_path`` (line by line), the lines :data:`SHOWN` onto stdout and the
+    posefix error lines once each onto stderr: the exit code and the error lines."""
     errors = []
     log_path.parent.mkdir(parents=True, exist_ok=True)
-    with open(log_path, "w", encoding="utf-8") as log, subprocess.Popen(
+    with open(log_path, "w", encoding="utf-8", buffering=1) as log, subprocess.Popen(
             command, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, errors="replace",
             start_new_session=True) as child:
         try:
@@ -118,11 +118,13 @@ def run(command, log_path):
             for line in child.stdout:
                 log.write(line)
                 table = table or line.startswith("Job stats:")
-                if table or SHOWN.match(line):
+                error = line.startswith("posefix") and "error:" in line
+                if error and line not in errors:  # once, to stderr
+                    errors.append(line)
+                    print(line, end="", file=sys.stderr, flush=True)
+                elif not error and (table or SHOWN.match(line)):
                     print(line, end="", flush=True)
                 table = table and not line.startswith("total")
-                if line.startswith("posefix") and "error:" in line and line not in errors:
-                    errors.append(line)
             return child.wait(), errors
         except KeyboardInterrupt:  # Ctrl-C: stop Snakemake and its jobs, quietly
             child.send_signal(signal.SIGINT)
@@ -173,8 +175,8 @@ def main(argv=None):
     if code == 130:
         print("posefix: interrupted; run the same command again to go on", file=sys.stderr)
     elif code != 0:
-        print("".join(errors) if errors else failure_line(log_path.read_text(errors="replace"), Path.cwd()),
-              end="" if errors else "\n", file=sys.stderr)
+        if not errors:
+            print(failure_line(log_path.read_text(errors="replace"), Path.cwd()), file=sys.stderr)
         print(f"posefix: Snakemake's full output: {log_path}", file=sys.stderr)
     sys.exit(code)
 
