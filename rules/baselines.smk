@@ -21,6 +21,8 @@ rule skeleton:
         script=stage_script("skeleton"),
         code=stage_code("skeleton"),
     threads: 1
+    resources:
+        mem_mb=memory_mb("skeleton"),
     log:
         f"{RESULTS}/logs/skeleton.log",
     benchmark:
@@ -45,6 +47,8 @@ rule repair_medial:
         script=stage_script("repair_medial"),
         code=stage_code("repair_medial"),
     threads: MEDIAL["threads"]
+    resources:
+        mem_mb=memory_mb("repair_medial"),
     log:
         f"{RESULTS}/logs/{{pose}}/repair_medial.log",
     benchmark:
@@ -67,6 +71,8 @@ rule tet_mesh:
         script=stage_script("tet_mesh"),
         code=stage_code("tet_mesh"),
     threads: 1
+    resources:
+        mem_mb=memory_mb("tet_mesh"),
     log:
         f"{RESULTS}/logs/tet_mesh.log",
     benchmark:
@@ -91,6 +97,8 @@ rule repair_volumetric:
         script=stage_script("repair_volumetric"),
         code=stage_code("repair_volumetric"),
     threads: FILL["threads"]
+    resources:
+        mem_mb=memory_mb("repair_volumetric"),
     log:
         f"{RESULTS}/logs/{{pose}}/repair_volumetric.log",
     benchmark:
@@ -114,6 +122,8 @@ rule repair_contact:
         script=stage_script("repair_contact"),
         code=stage_code("repair_contact"),
     threads: config["repair_contact"]["threads"]
+    resources:
+        mem_mb=memory_mb("repair_contact"),
     log:
         f"{RESULTS}/logs/{{pose}}/repair_contact.log",
     benchmark:
@@ -139,6 +149,8 @@ rule export_baseline:
         script=stage_script("export"),
         code=stage_code("export"),
     threads: 1
+    resources:
+        mem_mb=memory_mb("export_baseline"),
     log:
         f"{RESULTS}/logs/{{pose}}/export_{{baseline}}{{suffix}}.log",
     benchmark:

@@ -16,8 +16,11 @@ from posefix.workflow.partial_summary import finished_poses, pose_errors
 from posefix.workflow.config_check import config_problems, typed_by_schema
 from posefix.io.errors import InputError
 from posefix.workflow.fingerprint import CodeFingerprints
-from posefix.io.library import Library, discover_library
+from posefix.io.artifacts import read_artifact
+from posefix.io.library import Library, discover_library, read_reference
 from posefix.workflow.locks import clear_stale_locks
+from posefix.workflow.memory import memory_problem, stage_memory_mb
+from posefix.workflow.resources import available_memory
 from posefix.io.meshes import mesh_file
 from posefix.report.contents import POSE_FIGURES, TIMED_STAGES
 
@@ -74,11 +77,10 @@ def _pose_list(value):
     return value or None
 
 
-def _demo_library():
+def _demo_library(wanted):
     folder = config["demo"]["folder"]
     reference = mesh_file(f"{folder}/{demo.REFERENCE_NAME}{demo.REFERENCE_SUFFIX}")
     poses = [mesh_file(f"{folder}/{p.name}{p.suffix}") for p in demo.POSES]
-    wanted = _pose_list(config["poses"])
     if wanted:
         unknown = sorted(set(wanted) - {p.name for p in poses})
         if unknown:
@@ -87,18 +89,18 @@ def _demo_library():
     return Library(folder=folder, name=config["name"] or "demo", reference=reference, poses=tuple(poses))
 
 
-def _library():
-    """The pose library to process; input problems end the run with one line."""
+def _library(wanted):
+    """The pose library, its poses ``wanted`` (all: None); input problems end the run with one line."""
     try:
         if config["library"] is None:
-            return _demo_library()
-        return discover_library(config["library"], reference=config["reference"],
-                                poses=_pose_list(config["poses"]), name=config["name"])
+            return _demo_library(wanted)
+        return discover_library(config["library"], reference=config["reference"], poses=wanted, name=config["name"])
     except InputError as exc:
         sys.exit(f"posefix: error: {exc}")
 
 
-LIBRARY = _library()
+LIBRARY = _library(_pose_list(config["poses"]))
+WHOLE_LIBRARY = _library(None) if config["poses"] else LIBRARY  # every pose of the folder (the summary's)
 POSES = [p.name for p in LIBRARY.poses]
 for _path, _cause in LIBRARY.refused if workflow.is_main_process else ():  # one line each; the others go on
     print(f"posefix: warning: {_path}: {_cause}; left out of the library", file=sys.stderr)
@@ -112,6 +114,60 @@ BASELINES = config["baselines"]  # repairs beside S0, compared in the report
 BASELINE_CHOICES = ("medial", "volumetric", "contact")  # stage repair_<name> writes results/<library>/<pose>/<name>.h5
 
 
+def _memory_limit_mb():
+    """Memory this run may use (MB): the user's ``--resources mem_mb``; in a local run without it, the memory
+    available now, registered as the run's mem_mb so that Snakemake never starts jobs together that would not fit
+    (each rule asks for memory_mb() of its stage); 0 (no limit) on a cluster, where each job gets its own."""
+    given = workflow.global_resources.get("mem_mb")
+    if given is not None and given.value is not None:
+        return int(given.value)
+    if not workflow.local_exec:
+        return 0
+    limit = int(available_memory() / 1e6)
+    workflow.register_resource("mem_mb", limit)
+    return limit
+
+
+MEMORY_LIMIT_MB = _memory_limit_mb()
+
+
+_VERTICES = {}
+
+
+def reference_vertices():
+    """Vertex count of the reference: from reference.h5 when validate_reference wrote it from this file, else from
+    the mesh file (0 while it cannot be read: the demo's files not yet written, or a bad file that
+    validate_reference names)."""
+    if "n" not in _VERTICES:
+        checked = Path(f"{RESULTS}/reference.h5")
+        try:
+            if checked.is_file() and checked.stat().st_mtime >= Path(LIBRARY.reference.path).stat().st_mtime:
+                _VERTICES["n"] = int(read_artifact(f"{RESULTS}/reference.h5", "validate", [])[1]["metrics"]["vertices"])
+            else:
+                _VERTICES["n"] = len(read_reference(LIBRARY.reference.path)[0])
+        except Exception:  # noqa: BLE001  (any unreadable file: validate_reference names it)
+            return 0
+    return _VERTICES["n"]
+
+
+if workflow.is_main_process:  # a reference too large for the run is refused before any job starts
+    _problem = memory_problem(reference_vertices(), MEMORY_LIMIT_MB)
+    if _problem:
+        sys.exit(f"posefix: error: {LIBRARY.reference.path}: {_problem}")
+
+
+def within_limit(mb):
+    """``mb`` capped at what the run may use (Snakemake refuses a job that asks for more than the run has)."""
+    return min(mb, MEMORY_LIMIT_MB) if MEMORY_LIMIT_MB > 0 else mb
+
+
+def memory_mb(stage):
+    """``resources.mem_mb`` of the stage's rule (a function of the job), its measured need for the reference's
+    size (posefix.workflow.resources.stage_memory_mb) within the run's limit (a reference that needs more is refused
+    when the run starts, in one line)."""
+    return lambda wildcards: within_limit(stage_memory_mb(stage, reference_vertices()))
+
+
 def baseline_artifacts(pose):
     """The artifacts of the baseline repairs of ``pose``: {name: results/<library>/<pose>/<name>.h5}."""
     return {name: f"{RESULTS}/{pose}/{name}.h5" for name in BASELINES}
@@ -119,7 +175,7 @@ def baseline_artifacts(pose):
 
 def baseline_repaired_file(name, pose):
     """Output path of a baseline's repaired mesh: results/<library>/repaired-<name>/<pose><input suffix>."""
-    return f"{RESULTS}/repaired-{name}/{pose}{LIBRARY.pose(pose).suffix}"
+    return f"{RESULTS}/repaired-{name}/{pose}{WHOLE_LIBRARY.pose(pose).suffix}"
 
 
 def pose_file(wildcards):
@@ -150,7 +206,7 @@ def exclude_files(wildcards):
 
 def repaired_file(pose):
     """Output path of the repaired mesh of a pose: results/<library>/repaired/<pose><input suffix>."""
-    return f"{RESULTS}/repaired/{pose}{LIBRARY.pose(pose).suffix}"
+    return f"{RESULTS}/repaired/{pose}{WHOLE_LIBRARY.pose(pose).suffix}"
 
 
 def pose_figure(figure):
@@ -162,6 +218,26 @@ def pose_figure(figure):
         subcategory="{pose}",
         labels={"pose": "{pose}", "figure": POSE_FIGURES[figure]},
     )
+
+
+def summary_inputs(pose):
+    """The files of ``pose`` that the library's summary reads (the pose has finished when they all exist)."""
+    return ([f"{RESULTS}/{pose}/{a}.h5" for a in ("keyframes", "classify", "verify", "downstream")]
+            + list(baseline_artifacts(pose).values()) + [repaired_file(pose)])
+
+
+def _summary_poses():
+    """The poses of the library's summary, in library order: this run's, and those of the folder that an earlier
+    run finished (a repair of some poses adds them to the summary rather than replacing it; those are read as they
+    are, not rerun)."""
+    if not config["poses"]:
+        return POSES
+    earlier = [p.name for p in WHOLE_LIBRARY.poses if p.name not in POSES]
+    finished, _ = finished_poses({p: summary_inputs(p) for p in earlier})
+    return [p.name for p in WHOLE_LIBRARY.poses if p.name in POSES or p.name in finished]
+
+
+SUMMARY_POSES = _summary_poses()
 
 
 def get_final_output():
@@ -179,9 +255,7 @@ def get_final_output():
 def partial_summary(errors):
     """After a failed run: the summary and overview of the poses that finished, the others listed with their error
     line (``errors``: the posefix error lines of the failed jobs); nothing when no pose finished."""
-    required = {p: [f"{RESULTS}/{p}/{a}.h5" for a in ("keyframes", "classify", "verify", "downstream")]
-                + list(baseline_artifacts(p).values()) + [repaired_file(p)] for p in POSES}
-    finished, unfinished = finished_poses(required)
+    finished, unfinished = finished_poses({p: summary_inputs(p) for p in SUMMARY_POSES})
     if not finished or not unfinished:
         return
     failed = [f"--failed={pose}={line}" for pose, line in pose_errors(unfinished, errors).items()]

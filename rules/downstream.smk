@@ -28,6 +28,8 @@ rule downstream:
         script=stage_script("downstream"),
         code=stage_code("downstream"),
     threads: config["downstream"]["threads"]
+    resources:
+        mem_mb=memory_mb("downstream"),
     log:
         f"{RESULTS}/logs/{{pose}}/downstream.log",
     benchmark:

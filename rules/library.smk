@@ -10,6 +10,8 @@ rule demo:
         script=stage_script("demo"),
         code=stage_code("demo"),
     threads: 1
+    resources:
+        mem_mb=memory_mb("demo"),
     log:
         f"{RESULTS}/logs/demo.log",
     benchmark:
@@ -33,6 +35,8 @@ rule validate_reference:
         script=stage_script("validate"),
         code=stage_code("validate"),
     threads: 1
+    resources:
+        mem_mb=memory_mb("validate_reference"),
     log:
         f"{RESULTS}/logs/validate_reference.log",
     benchmark:
@@ -58,6 +62,8 @@ rule validate:
         script=stage_script("validate"),
         code=stage_code("validate"),
     threads: 1
+    resources:
+        mem_mb=memory_mb("validate"),
     log:
         f"{RESULTS}/logs/{{pose}}/validate.log",
     benchmark:

@@ -15,12 +15,14 @@ rule summary:
         md=f"{REPORTS}/summary.md",
     params:
         results=lambda wildcards, input: os.path.dirname(os.path.dirname(input.verify[0])),
-        poses=",".join(POSES),
+        poses=",".join(SUMMARY_POSES),  # with the poses an earlier run finished
         baselines=f"--baselines {','.join(BASELINES)}" if BASELINES else "",
         limit=config["summary"]["distortion_limit"],
         script=stage_script("summary"),
         code=stage_code("summary"),
     threads: 1
+    resources:
+        mem_mb=memory_mb("summary"),
     log:
         f"{RESULTS}/logs/summary.log",
     conda:
@@ -49,6 +51,8 @@ rule render:
         script=stage_script("render"),
         code=stage_code("render"),
     threads: 1
+    resources:
+        mem_mb=memory_mb("render"),
     log:
         f"{RESULTS}/logs/{{pose}}/render.log",
     benchmark:
@@ -82,6 +86,8 @@ rule overview:
         script=stage_script("overview"),
         code=stage_code("overview"),
     threads: 1
+    resources:
+        mem_mb=memory_mb("overview"),
     log:
         f"{RESULTS}/logs/overview.log",
     conda:

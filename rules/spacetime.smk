@@ -13,6 +13,8 @@ rule keyframes:
         script=stage_script("keyframes"),
         code=stage_code("keyframes"),
     threads: config["keyframes"]["threads"]
+    resources:
+        mem_mb=memory_mb("keyframes"),
     log:
         f"{RESULTS}/logs/{{pose}}/keyframes.log",
     benchmark:
@@ -36,6 +38,8 @@ rule classify:
         script=stage_script("classify"),
         code=stage_code("classify"),
     threads: config["classify"]["threads"]
+    resources:
+        mem_mb=memory_mb("classify"),
     log:
         f"{RESULTS}/logs/{{pose}}/classify.log",
     benchmark:
@@ -59,6 +63,8 @@ rule constraints:
         script=stage_script("constraints"),
         code=stage_code("constraints"),
     threads: config["constraints"]["threads"]
+    resources:
+        mem_mb=memory_mb("constraints"),
     log:
         f"{RESULTS}/logs/{{pose}}/constraints.log",
     benchmark:
@@ -83,7 +89,7 @@ rule fit:
         code=stage_code("fit"),
     threads: config["fit"]["threads"]
     resources:
-        mem_mb=int(1000 * config["fit"]["memory_gb"]) + 2000,
+        mem_mb=within_limit(int(1000 * config["fit"]["memory_gb"]) + 2000),
     log:
         f"{RESULTS}/logs/{{pose}}/fit.log",
     benchmark:
@@ -108,6 +114,8 @@ rule integrate:
         script=stage_script("integrate"),
         code=stage_code("integrate"),
     threads: config["integrate"]["threads"]
+    resources:
+        mem_mb=memory_mb("integrate"),
     log:
         f"{RESULTS}/logs/{{pose}}/integrate.log",
     benchmark:

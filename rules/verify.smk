@@ -15,6 +15,8 @@ rule verify:
         script=stage_script("verify"),
         code=stage_code("verify"),
     threads: config["verify"]["threads"]
+    resources:
+        mem_mb=memory_mb("verify"),
     log:
         f"{RESULTS}/logs/{{pose}}/verify.log",
     benchmark:
@@ -40,6 +42,8 @@ rule export:
         script=stage_script("export"),
         code=stage_code("export"),
     threads: 1
+    resources:
+        mem_mb=memory_mb("export"),
     log:
         f"{RESULTS}/logs/{{pose}}/export{{suffix}}.log",
     benchmark:

@@ -80,7 +80,7 @@ def build_parser():
 def main(args, log):
     timings = Timings()
     with timings.step("read"):
-        kf, _ = read_artifact(args.keyframes, "keyframes", ["reference", "target", "faces"])
+        kf, kattrs = read_artifact(args.keyframes, "keyframes", ["reference", "target", "faces"])
         cl, _ = read_artifact(args.classify, "classify", ["mask", "pairs", "pair_offsets"])
         it, _ = read_artifact(args.integrate, "integrate", ["positions", "samples"])
         _, fattrs = read_artifact(args.fit, "fit", [])
@@ -90,6 +90,7 @@ def main(args, log):
                               args.repair_new, args.reproduce)
     result, params = _finish(args, problem, it, fattrs, settings)
     timings.update(result.seconds)
+    _say_what_was_left(json.loads(kattrs["inputs"])[-1], result.metrics, log)
     write_artifact(
         args.out, "verify",
         {"integrated_deviation": result.integrated_deviation, "repaired": result.X, "deviation": result.deviation,
@@ -97,6 +98,22 @@ def main(args, log):
         params=params,
         inputs=[args.keyframes, args.classify, args.integrate, args.fit], timings=timings,
         metrics=result.metrics, docs=DOCS)
+
+
+def _say_what_was_left(target, metrics, log):
+    """A warning naming the pose file when the repair left something: new intersecting faces, vertices the snap
+    finish took from the target (pass-through: the target's intersections with them), or a contact finish that
+    fell back to the path lines."""
+    left = []
+    if metrics["repaired_new"]:
+        left.append(f"{metrics['repaired_new']} new intersecting faces remain")
+    if metrics.get("fallback_pass_through"):
+        left.append(f"{metrics['fallback_pass_through']} vertices are the target's (pass-through: key frames pass "
+                    "through each other there)")
+    if metrics.get("contact_reverted"):
+        left.append("the contact finish fell back to the integrated path (a step it could not bound)")
+    if left:
+        log.warning("%s: %s; see the report's pose page", target, "; ".join(left))
 
 
 def _finish(args, problem, integrated, fit_attrs, settings):

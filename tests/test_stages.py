@@ -206,6 +206,23 @@ def test_stages_are_deterministic(demo_artifacts, tmp_path):
                     assert np.array_equal(fa[name][()], fb[name][()]), name
 
 
+def test_verify_names_the_pose_whose_repair_left_something_and_what(demo_artifacts, tmp_path):
+    """The snap finish of this small fit takes the target back where key frames pass through each other, its
+    intersections with it: one warning naming the pose file and both; the contact finish leaves nothing to say."""
+    inputs = [f"--{k}={demo_artifacts / f'{k}.h5'}" for k in ("keyframes", "classify", "integrate", "fit")]
+    proc = run_stage("verify", *inputs, "--finish", "snap", "--out", tmp_path / "snap.h5")
+    with h5py.File(tmp_path / "snap.h5", "r") as fh:
+        new, taken = int(fh["metrics"].attrs["repaired_new"]), int(fh["metrics"].attrs["fallback_pass_through"])
+    assert new > 0 and taken > 0
+    warnings = [line for line in proc.stderr.splitlines() if "warning" in line]
+    assert len(warnings) == 1 and warnings[0].endswith(
+        f"posefix verify: warning: {demo_artifacts / 'lib' / 'demo-01.obj'}: {new} new intersecting faces remain; "
+        f"{taken} vertices are the target's (pass-through: key frames pass through each other there); see the "
+        "report's pose page"), warnings
+    proc = run_stage("verify", *inputs, "--out", tmp_path / "contact.h5")
+    assert "warning" not in proc.stderr
+
+
 def test_manual_exclusion_from_a_file(demo_artifacts, tmp_path):
     ids = tmp_path / "ids.txt"
     ids.write_text("0 1 2\n")

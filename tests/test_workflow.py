@@ -3,6 +3,7 @@
 import json
 import subprocess
 import sys
+from pathlib import Path
 
 import h5py
 import numpy as np
@@ -364,3 +365,131 @@ def test_plain_snakemake_ends_a_failed_run_with_the_posefix_error_lines(tmp_path
     assert summary["failed"] == [{"pose": "ball-02", "error": line}]
     assert "ball-02</b>: posefix validate: error: " in (tmp_path / "reports" / "lib" / "summary.html").read_text()
     assert "posefix: summary of the 1 poses that finished, 1 listed as failed: reports/lib/summary.html" in tail
+
+
+def test_a_library_that_would_not_fit_the_runs_memory_is_refused_up_front_in_one_line(tmp_path):
+    """--resources mem_mb below what the stages need for the mesh: one line naming the reference, before any job
+    starts."""
+    library = tmp_path / "lib"
+    V, F = icosphere(2)
+    write_mesh(library / "ball-reference.obj", V, F)
+    write_mesh(library / "ball-01.obj", V * [1.2, 1.0, 0.9], F)
+    proc = snakemake(tmp_path, "--resources", "mem_mb=100", "--config", f"library={library}", "baselines=[]")
+    assert proc.returncode != 0 and "Traceback" not in proc.stderr, proc.stderr[-3000:]
+    assert proc.stderr.splitlines()[-1].startswith(
+        f"posefix: error: {library / 'ball-reference.obj'}: 162 vertices need about 1.0 GB in stage "), proc.stderr
+    assert "more than the 0.1 GB this run may use" in proc.stderr.splitlines()[-1]
+    assert not (tmp_path / "results").exists()
+
+
+def test_each_rule_asks_for_the_memory_its_stage_needs_for_the_reference_size(tmp_path):
+    """A dry run shows every job's mem_mb: the stage's measured line for the reference's vertex count (read from
+    the mesh file before validate_reference has run); the fit's, its cache's budget, within the run's limit."""
+    from posefix.workflow.memory import stage_memory_mb
+    library = tmp_path / "lib"
+    V, F = icosphere(6)
+    write_mesh(library / "ball-reference.obj", V, F)
+    write_mesh(library / "ball-01.obj", V * [1.2, 1.0, 0.9], F)
+    proc = snakemake(tmp_path, "-n", "--resources", "mem_mb=100000", "--config", f"library={library}")
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    jobs = _dry_run_resources(proc.stdout + proc.stderr)
+    for rule in ("classify", "downstream", "repair_volumetric", "verify"):
+        assert jobs[rule] == stage_memory_mb(rule, len(V)), (rule, jobs)
+    assert jobs["downstream"] > 1000  # above the floor at 41k vertices
+    assert jobs["fit"] == 10000  # its kernel cache's budget (config fit.memory_gb) and 2 GB
+    proc = snakemake(tmp_path, "-n", "--resources", "mem_mb=5000", "--config", f"library={library}")
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    assert _dry_run_resources(proc.stdout + proc.stderr) == jobs | {"fit": 5000}  # within the run's memory
+
+
+def _dry_run_resources(text):
+    """{rule: mem_mb} from the job blocks of a Snakemake dry run."""
+    out, rule = {}, None
+    for line in text.splitlines():
+        line = line.strip()
+        if line.startswith("rule ") or line.startswith("localrule "):
+            rule = line.split()[1].rstrip(":")
+        elif line.startswith("resources:") and rule:
+            fields = dict(f.split("=", 1) for f in line[len("resources:"):].replace(" ", "").split(",") if "=" in f)
+            if "mem_mb" in fields:
+                out[rule] = int(fields["mem_mb"])
+    return out
+
+
+def test_a_second_subset_of_poses_adds_to_the_librarys_summary(tmp_path):
+    """poses=ball-01, then poses=ball-02: the library's summary lists both, in library order, and the first pose
+    is read as it was, not rerun."""
+    library = tmp_path / "lib"
+    V, F = icosphere(2)
+    write_mesh(library / "ball-reference.obj", V, F)
+    write_mesh(library / "ball-01.obj", V * [1.2, 1.0, 0.9], F)
+    write_mesh(library / "ball-02.obj", V * [0.9, 1.1, 1.0], F)
+    for pose in ("ball-01", "ball-02"):
+        proc = snakemake(tmp_path, "--config", f"library={library}", f"poses={pose}", "baselines=[]")
+        assert proc.returncode == 0, proc.stderr[-3000:]
+        if pose == "ball-01":
+            first = (tmp_path / "results" / "lib" / "ball-01" / "verify.h5").stat().st_mtime_ns
+    summary = json.loads((tmp_path / "reports" / "lib" / "summary.json").read_text())
+    assert [e["pose"] for e in summary["poses"]] == ["ball-01", "ball-02"]
+    assert "ball-01" in (tmp_path / "reports" / "lib" / "summary.md").read_text()
+    assert (tmp_path / "results" / "lib" / "ball-01" / "verify.h5").stat().st_mtime_ns == first
+
+
+def _bad_poses(library, V, F):
+    """Pose files that cannot be repaired, each in its own way: {file name: what its error line must say}."""
+    far = V.copy()
+    far[7] = 1e30
+    flipped = F.copy()
+    flipped[0] = flipped[0, ::-1]
+    nan = V.copy()
+    nan[3, 1] = np.nan
+    write_mesh(library / "far.obj", far, F)
+    write_mesh(library / "flipped.obj", V, flipped)
+    write_mesh(library / "fewer.obj", V[:-1], F[F.max(axis=1) < len(V) - 1])
+    write_mesh(library / "nan.obj", nan, F)
+    (library / "empty.obj").write_text("")
+    (library / "binary.obj").write_bytes(bytes(range(256)) * 4)
+    (library / "index.obj").write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n")
+    (library / "truncated.obj").write_text("v 0 0 0\nv 1 0\n")
+    return {"far.obj": "vertex 7", "flipped.obj": "face", "fewer.obj": "vertices", "nan.obj": "vertex 3",
+            "empty.obj": "empty", "binary.obj": "binary", "index.obj": "face vertex index 9",
+            "truncated.obj": "line 2"}
+
+
+def test_bad_poses_among_good_ones_each_fail_in_one_line_and_the_good_ones_are_repaired(tmp_path):
+    """Eight broken pose files beside two good ones: one error line each, naming the file (no traceback); the
+    good poses are repaired and in the summary, the broken ones listed there as failed; the run exits 1."""
+    library = tmp_path / "lib"
+    V, F = icosphere(2)
+    write_mesh(library / "ball-reference.obj", V, F)
+    write_mesh(library / "ball-01.obj", V * [1.2, 1.0, 0.9], F)
+    write_mesh(library / "ball-02.obj", V * [0.9, 1.1, 1.0], F)
+    bad = _bad_poses(library, V, F)
+    proc = snakemake(tmp_path, "--config", f"library={library}", "baselines=[]")
+    assert proc.returncode == 1 and "Traceback" not in proc.stderr, proc.stderr[-3000:]
+    errors = [line for line in proc.stderr.splitlines() if line.startswith("posefix validate: error:")]
+    for name, says in bad.items():
+        named = [line for line in errors if line.startswith(f"posefix validate: error: {library / name}: ")]
+        assert len(named) == 1 and says in named[0], (name, errors)
+    summary = json.loads((tmp_path / "reports" / "lib" / "summary.json").read_text())
+    assert [e["pose"] for e in summary["poses"]] == ["ball-01", "ball-02"]
+    assert sorted(e["pose"] for e in summary["failed"]) == sorted(Path(n).stem for n in bad)
+    for pose in ("ball-01", "ball-02"):
+        assert (tmp_path / "results" / "lib" / "repaired" / f"{pose}.obj").exists()
+
+
+def test_poses_whose_names_a_shell_would_split_are_repaired_under_their_own_names(tmp_path):
+    """Spaces, quotes, a dollar sign, a semicolon and non-ASCII letters in pose file names: every pose is repaired,
+    its repaired file and summary entry under the name it came with."""
+    library = tmp_path / "lib"
+    V, F = icosphere(2)
+    write_mesh(library / "ball-reference.obj", V, F)
+    names = ["walk 2", "it's", "$HOME", "a;b", "sauté", 'say "hi"']
+    for i, name in enumerate(names):
+        write_mesh(library / f"{name}.obj", V * [1.0 + 0.05 * i, 1.0, 0.95], F)
+    proc = snakemake(tmp_path, "--config", f"library={library}", "baselines=[]")
+    assert proc.returncode == 0 and "Traceback" not in proc.stderr, proc.stderr[-3000:]
+    summary = json.loads((tmp_path / "reports" / "lib" / "summary.json").read_text())
+    assert sorted(e["pose"] for e in summary["poses"]) == sorted(names)
+    for name in names:
+        assert (tmp_path / "results" / "lib" / "repaired" / f"{name}.obj").exists(), name

@@ -1,5 +1,6 @@
 import numpy as np
 import pytest
+import scipy.sparse as sp
 import trimesh
 
 from posefix.mesh.contact_solver import ContactSettings, ContactSolver, tolerated_primitives
@@ -33,6 +34,26 @@ def test_two_spheres_pushed_into_each_other_stop_with_a_gap_up_to_dhat():
     assert r.contact.any() and not r.contact.all()
     # the spheres did move toward each other: only dhat apart at the closest points
     assert r.X[left, 0].max() > -0.01 and r.X[~left, 0].min() < 0.01
+
+
+def test_a_full_cache_of_inverse_columns_starts_again_with_the_same_steps(monkeypatch):
+    """Room for 20 cached columns of Q^-1 (of 324 vertices; 14 to 38 vertices in contact): steps with more vertices
+    in contact than fit factorize the whole Hessian, and the pose is the one of an unbounded cache; the cache
+    starts again when columns of other vertices no longer fit."""
+    import posefix.mesh.contact_solver as contact_solver
+    V, F = union(sphere([-1.2, 0, 0]), sphere([1.2, 0, 0]))
+    goal = V + np.where((np.arange(len(V)) < len(V) // 2)[:, None], [0.6, 0, 0], [-0.6, 0, 0])
+    unbounded = ContactSolver(V, F).compute_pose(V, goal, np.ones(len(V)))
+    monkeypatch.setattr(contact_solver, "_SCHUR_BYTES", 20 * 8 * len(V))
+    bounded = ContactSolver(V, F).compute_pose(V, goal, np.ones(len(V)))
+    assert bounded.converged and bounded.iterations == unbounded.iterations
+    assert np.allclose(bounded.X, unbounded.X, rtol=0, atol=1e-9)
+    Q = sp.identity(len(V)) + sp.csr_matrix(trimesh.Trimesh(V, F, process=False).edges_sparse, dtype=float) * 0.1
+    system = contact_solver._NewtonSystem(Q, [np.arange(len(V))] * 2)
+    for vertices in (np.arange(0, 12), np.arange(12, 20), np.arange(100, 110), np.arange(5, 15)):
+        columns = system.inverse_columns(vertices)
+        assert np.allclose(system.W[columns].T, np.linalg.inv(Q.toarray())[:, vertices], atol=1e-12)
+    assert system.count == 20 and len(system.W) == 20  # started again at 100..109, then 5..14 added
 
 
 def test_a_rigid_motion_of_the_goals_comes_back_exactly():

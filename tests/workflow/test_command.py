@@ -1,8 +1,11 @@
 """The posefix command: the workflow from any folder, the posefix error lines at the end of a failed run."""
 
 import argparse
+import os
+import signal
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import pytest
@@ -40,8 +43,24 @@ def test_the_snakemake_command_line(tmp_path):
     assert command[1:5] == ["-m", "snakemake", "-s", str(WORKFLOW / "Snakefile")]
     assert command[5:8] == ["--config", f"library={tmp_path.resolve()}", "poses=a,b"]
     assert command[8:] == ["--cores", "4", "--workflow-profile", str(WORKFLOW / "profiles" / "slurm")]
+    report = snakemake_command(build_parser().parse_args(["repair", str(tmp_path), "--memory", "7.5"]))
+    assert report[-4:] == ["--cores", "2", "--resources", "mem_mb=7500"]
     report = snakemake_command(build_parser().parse_args(["report", str(tmp_path)]))
     assert report[-2:] == ["--report", f"reports/{tmp_path.name}/report.html"]
+
+
+@pytest.mark.pipeline
+def test_a_library_too_large_for_the_memory_given_is_refused_in_one_line_before_anything_runs(tmp_path):
+    library = tmp_path / "lib"
+    V, F = icosphere(2)
+    write_mesh(library / "ball-reference.obj", V, F)
+    write_mesh(library / "ball-01.obj", V * 1.1, F)
+    proc = posefix("repair", library, "--memory", "0.2", cwd=tmp_path)
+    assert proc.returncode != 0 and "Traceback" not in proc.stderr, proc.stderr
+    lines = proc.stderr.splitlines()
+    assert lines[0].startswith(f"posefix: error: {library / 'ball-reference.obj'}: 162 vertices need about 1.0 GB "
+                               "in stage ") and "more than the 0.2 GB this run may use" in lines[0], lines
+    assert len(lines) == 2 and not (tmp_path / "results").exists()
 
 
 @pytest.mark.pipeline
@@ -73,9 +92,38 @@ def test_a_failed_run_ends_with_the_posefix_error_line(tmp_path):
     assert "error:" not in proc.stdout  # once, on stderr
 
 
+@pytest.mark.pipeline
+def test_a_second_run_in_a_folder_where_one_works_is_refused_in_one_line(tmp_path):
+    """While a repair works in a folder, a second one started there stops at once with one line (no traceback), and
+    leaves the first one's work alone."""
+    library = tmp_path / "lib"
+    V, F = icosphere(2)
+    write_mesh(library / "ball-reference.obj", V, F)
+    write_mesh(library / "ball-01.obj", V * 1.1, F)
+    first = subprocess.Popen([sys.executable, "-m", "posefix.workflow.command", "repair", str(library), "--config",
+                              "baselines=[]"], cwd=tmp_path, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                             start_new_session=True)
+    try:
+        for _ in range(600):  # until Snakemake has locked the folder
+            if any((tmp_path / ".snakemake" / "locks").glob("*.lock")) or first.poll() is not None:
+                break
+            time.sleep(0.1)
+        assert first.poll() is None, "the first run ended before the second started"
+        proc = posefix("repair", library, "--config", "baselines=[]", cwd=tmp_path)
+    finally:
+        os.killpg(first.pid, signal.SIGINT)
+        first.wait(timeout=120)
+    assert proc.returncode != 0 and "Traceback" not in proc.stderr, proc.stderr
+    lines = proc.stderr.splitlines()
+    assert lines[0] == (f"posefix: error: {tmp_path}: another Snakemake run is working in this folder; wait for it to "
+                        "finish (if none is running: snakemake --unlock)"), lines
+    assert len(lines) == 2 and lines[1].startswith("posefix: Snakemake's full output: posefix-logs/repair-")
+
+
 @pytest.mark.parametrize("args, line", [
     (["--cores", "0"], "posefix: error: --cores 0: needs at least 1 core"),
     (["--cores", "-1"], "posefix: error: --cores -1: needs at least 1 core"),
+    (["--memory", "0"], "posefix: error: --memory 0: needs more than 0 GB"),
     (["--profile", "slrum"], "posefix: error: --profile slrum: no such profile (shipped: default, slurm; or give a "
                              "folder)"),
 ])

@@ -30,6 +30,7 @@ from dataclasses import dataclass
 
 import ipctk
 import numpy as np
+import scipy.linalg
 import scipy.sparse as sp
 
 from posefix.mesh.geometry import bbox_diagonal, vertex_areas
@@ -190,7 +191,8 @@ class ContactSolver:
         self.barrier = ipctk.BarrierPotential(self.dhat, 1.0)
         self._smoothness = _smoothness(V_ref, self.F, settings.smoothing * self.d)
         pattern = self._smoothness[1] + sp.identity(len(V_ref))
-        self._order = fill_reducing_order(pattern), fill_reducing_order(sp.kron(pattern, np.ones((3, 3))))
+        order = fill_reducing_order(pattern)  # the 3 x 3 blocks' order from the vertices' (kids240: 20 min -> s)
+        self._order = order, (3 * order[:, None] + np.arange(3)).ravel()
         self._system = (None, None)
         log.info("contact solver: %d vertices, %d tolerated faces and %d pairs touching at rest, clearance %.2e d, "
                  "dhat %.2e d", len(V_ref), int(tolerated.sum()), sum(len(k) for k in self._touching),
@@ -419,6 +421,9 @@ def _smoothness(V, F, length):
 _SCHUR_VERTICES = 1000
 """Most vertices in contact for which a Newton step solves the Schur complement of their unknowns (dense,
 3m x 3m) with the cached columns of ``Q^-1``; with more, the whole Hessian is factorized."""
+_SCHUR_BYTES = 1e9
+"""Most bytes of cached columns of ``Q^-1`` (n floats each: 2,000 columns at 60k vertices); when full, the cache
+starts again, and a step with more vertices in contact than fit factorizes the whole Hessian."""
 
 
 class _NewtonSystem:
@@ -427,14 +432,15 @@ class _NewtonSystem:
     ``Q`` (n x n) is factorized once; the barrier's Hessian ``Hb`` lives on the m vertices in contact, so a step
     is one solve with ``Q`` and a dense solve of the 3m contact unknowns' Schur complement, ``(I + S Hb_c) y = P
     H0^-1 r`` with ``S = P H0^-1 P^T``, and ``dx = H0^-1 r - H0^-1 P^T Hb_c y``. The columns of ``Q^-1`` at the
-    contact vertices are cached: the contacts change little from one step to the next.
+    contact vertices are cached (at most ``_SCHUR_BYTES``): the contacts change little from one step to the next.
     """
 
     def __init__(self, Q, orders):
         self.Q, self.orders = sp.csc_matrix(Q), orders
         p = orders[0]
         self.lu = factorized(self.Q[p][:, p], "NATURAL", symmetric=True)
-        self.W, self.count, self.column = np.zeros((Q.shape[0], 0)), 0, np.full(Q.shape[0], -1)
+        self.W, self.count, self.column = np.zeros((0, Q.shape[0])), 0, np.full(Q.shape[0], -1)
+        self.capacity = max(1, int(_SCHUR_BYTES // (8 * Q.shape[0])))
 
     def solve_q(self, R):
         """``Q^-1 R`` for ``R`` (n, k)."""
@@ -443,18 +449,22 @@ class _NewtonSystem:
         return out
 
     def inverse_columns(self, vertices):
-        """Where the columns of ``Q^-1`` at ``vertices`` (m,) are in ``self.W`` (n, capacity), (m,) int: each is
-        computed once, into a buffer that doubles when full."""
+        """Where the columns of ``Q^-1`` at ``vertices`` (m,) are stored, as rows of ``self.W`` (k, n), (m,) int:
+        each is computed once, into a buffer that doubles when full, up to ``self.capacity`` (then it starts
+        again)."""
         missing = vertices[self.column[vertices] < 0]
+        if self.count + len(missing) > self.capacity:
+            self.column[:], self.count, missing = -1, 0, vertices
         if len(missing):
-            if self.count + len(missing) > self.W.shape[1]:
-                W = np.zeros((len(self.W), max(2 * self.W.shape[1], self.count + len(missing))))
-                W[:, :self.count] = self.W[:, :self.count]
+            if self.count + len(missing) > len(self.W):
+                size = min(self.capacity, max(2 * len(self.W), self.count + len(missing)))
+                W = np.zeros((size, self.Q.shape[0]))
+                W[:self.count] = self.W[:self.count]
                 self.W = W
             E = np.zeros((self.Q.shape[0], len(missing)))
             E[missing, np.arange(len(missing))] = 1.0
             self.column[missing] = self.count + np.arange(len(missing))
-            self.W[:, self.count:self.count + len(missing)] = self.solve_q(E)
+            self.W[self.count:self.count + len(missing)] = self.solve_q(E).T
             self.count += len(missing)
         return self.column[vertices]
 
@@ -465,16 +475,20 @@ class _NewtonSystem:
             return X0
         Hb = sp.csr_matrix(Hb)
         vertices = np.unique(np.flatnonzero(np.diff(Hb.indptr)) // 3)
-        if len(vertices) > _SCHUR_VERTICES:
+        if len(vertices) > min(_SCHUR_VERTICES, self.capacity):
             return self._direct(R, Hb)
         dofs = (3 * vertices[:, None] + np.arange(3)).ravel()
-        B = Hb[dofs][:, dofs]
-        columns = self.inverse_columns(vertices)
-        S = np.kron(self.W[vertices][:, columns], np.eye(3))
-        y = np.linalg.solve(np.eye(len(dofs)) + (B.T @ S.T).T, X0[vertices].ravel())
-        Z = np.zeros((self.W.shape[1], 3))
-        Z[columns] = (B @ y).reshape(-1, 3)
-        return X0 - self.W @ Z
+        B = sp.csc_matrix(Hb[dofs][:, dofs])  # symmetric
+        columns = self.inverse_columns(vertices)  # (before self.W is read: it may grow)
+        W = self.W[columns]  # (m, n): Q^-1 at the contact vertices
+        Wc = W[:, vertices]  # S = Wc (x) I_3 (symmetric): (S B)^T = B S, whose column 3i+a is B[:, a::3] @ Wc[:, i]
+        BS = np.empty((len(dofs), len(dofs)))  # (no 3m x 3m Kronecker product formed)
+        for a in range(3):
+            BS[:, a::3] = B[:, a::3] @ Wc
+        M = BS.T
+        M[np.diag_indices_from(M)] += 1.0
+        y = scipy.linalg.solve(M, X0[vertices].ravel(), overwrite_a=True, check_finite=False)
+        return X0 - W.T @ (B @ y).reshape(-1, 3)
 
     def _direct(self, R, Hb):
         p = self.orders[1]

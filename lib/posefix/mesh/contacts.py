@@ -148,38 +148,47 @@ def contact_vertices(frames, F, V_ref, distance, radius):
 
 
 def _close_pairs(V, F, distance, groups, patches):
-    """Yield, :data:`_CHUNK` pairs looked at a time, (vertices (p,), faces (p,)) int64: the vertices of ``V`` (n, 3)
+    """Yield, about :data:`_CHUNK` pairs at a time, (vertices (p,), faces (p,)) int64: the vertices of ``V`` (n, 3)
     closer than ``distance`` to a face of another patch that is not NEAR theirs. ``groups``: (vertex order, vertex
     starts, face order, face starts) of the patches; ``patches``: (patch of each vertex (n,), patch status (k, k),
-    face status (k, m))."""
+    face status (k, m)). Within each pair of patches whose boxes come that close, a box tree of the one's vertices
+    against one of the other's faces finds the pairs to measure: their count grows with the contacts, not with the
+    product of the patches' sizes."""
     vert_order, vert_start, face_order, face_start = groups
     patch, status, face_status = patches
     with_faces = np.flatnonzero(face_start[1:] > face_start[:-1])
     T = V[F]
+    t_lo, t_hi = T.min(axis=1), T.max(axis=1)
     v_lo, v_hi = _group_boxes(V[vert_order], V[vert_order], vert_start)
-    f_lo, f_hi = _group_boxes(T.min(axis=1)[face_order], T.max(axis=1)[face_order], face_start)
+    f_lo, f_hi = _group_boxes(t_lo[face_order], t_hi[face_order], face_start)
     pairs = cross_overlapping_pairs(build_box_tree(v_lo - distance, v_hi + distance),
                                     build_box_tree(f_lo[with_faces], f_hi[with_faces]))
     a, b = pairs[:, 0], with_faces[pairs[:, 1]]
     a, b = a[status[a, b] != NEAR], b[status[a, b] != NEAR]
-    sizes = np.cumsum((vert_start[a + 1] - vert_start[a]) * (face_start[b + 1] - face_start[b]))
-    for chunk in np.split(np.arange(len(a)), np.searchsorted(sizes, np.arange(_CHUNK, sizes[-1:].sum(), _CHUNK))):
-        vv, ff = _expand(a[chunk], b[chunk], vert_order, vert_start, face_order, face_start)
-        keep = face_status[patch[vv], ff] != NEAR
-        vv, ff = vv[keep], ff[keep]
-        hit = point_triangle_distance(V[vv], T[ff, 0], T[ff, 1], T[ff, 2]) < distance
-        yield vv[hit], ff[hit]
+    trees, found, count = {}, [], 0
+    for i, (pa, pb) in enumerate(zip(a, b)):
+        verts, faces = vert_order[vert_start[pa]:vert_start[pa + 1]], face_order[face_start[pb]:face_start[pb + 1]]
+        if ("v", pa) not in trees:
+            trees["v", pa] = build_box_tree(V[verts] - distance, V[verts] + distance)
+        if ("f", pb) not in trees:
+            trees["f", pb] = build_box_tree(t_lo[faces], t_hi[faces])
+        close = cross_overlapping_pairs(trees["v", pa], trees["f", pb])
+        found.append((verts[close[:, 0]], faces[close[:, 1]]))
+        count += len(close)
+        if count >= _CHUNK or i == len(a) - 1:
+            yield _measured(V, T, distance, found, (patch, face_status))
+            found, count = [], 0
 
 
-def _expand(a, b, vert_order, vert_start, face_order, face_start):
-    """All (vertex of patch a[p], face of patch b[p]) pairs over the patch pairs p, as two arrays."""
-    nv = vert_start[a + 1] - vert_start[a]
-    nf = face_start[b + 1] - face_start[b]
-    sizes = nv * nf
-    pid = np.repeat(np.arange(len(a)), sizes)
-    offset = np.arange(sizes.sum()) - np.repeat(np.cumsum(sizes) - sizes, sizes)
-    vi, fi = np.divmod(offset, nf[pid]) if len(pid) else (offset, offset)
-    return vert_order[vert_start[a[pid]] + vi], face_order[face_start[b[pid]] + fi]
+def _measured(V, T, distance, found, patches):
+    """The pairs of ``found`` (list of (vertices, faces)) whose face is not NEAR the vertex's patch and closer than
+    ``distance`` to it: (vertices (p,), faces (p,))."""
+    patch, face_status = patches
+    vv, ff = (np.concatenate(x) for x in zip(*found))
+    keep = face_status[patch[vv], ff] != NEAR
+    vv, ff = vv[keep], ff[keep]
+    hit = point_triangle_distance(V[vv], T[ff, 0], T[ff, 1], T[ff, 2]) < distance
+    return vv[hit], ff[hit]
 
 
 def _vertex_bounds(pairs, F, patch, to_seed, between, radius):

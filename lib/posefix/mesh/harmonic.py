@@ -44,7 +44,7 @@ def harmonic_extension(A, values, known):
         return out
     degree = np.asarray(A[solve].sum(axis=1)).ravel()
     L_ss = (sp.diags(degree) - A[solve][:, solve]).tocsc()
-    out[solve] = factorized(L_ss).solve(A[solve][:, known] @ out[known])
+    out[solve] = factorized(L_ss, "MMD_AT_PLUS_A", symmetric=True).solve(A[solve][:, known] @ out[known])
     return out
 
 
@@ -77,5 +77,6 @@ def biharmonic_extension(A, values, known, unknown):
     L = (sp.diags(np.asarray(A.sum(axis=1)).ravel()) - A).tocsc()
     Q = (L.T @ L).tocsr()
     Q_ss = Q[solve][:, solve] + sp.identity(len(solve)) * ROUNDOFF  # regular where a part touches no zero vertex
-    out[solve] = factorized(Q_ss).solve(-(Q[solve][:, np.flatnonzero(known)] @ out[known]))
+    out[solve] = factorized(Q_ss.tocsc(), "MMD_AT_PLUS_A", symmetric=True).solve(
+        -(Q[solve][:, np.flatnonzero(known)] @ out[known]))
     return out

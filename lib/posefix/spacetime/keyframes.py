@@ -100,7 +100,7 @@ def prepare(V_ref, V_tgt, F, align=True, unwrap=True):
     L = cotangent_laplacian(V_ref, F)
     anchors = np.unique(labels, return_index=True)[1]
     free = np.setdiff1d(np.arange(n), anchors)
-    solver = factorized(L[free][:, free], ordering="MMD_AT_PLUS_A") if len(free) else None
+    solver = factorized(L[free][:, free], ordering="MMD_AT_PLUS_A", symmetric=True) if len(free) else None
     return Interpolation(
         F=F, omega=omega, turns=turns, stretch=S, global_omega=rotation_log(R_g[None])[0],
         c_ref=c_ref, c_tgt=c_tgt,

@@ -49,6 +49,9 @@ def build_parser():
     repair.add_argument("--cores", type=int, default=2, help="cores to use (default 2)")
     repair.add_argument("--profile", default=None,
                         help="workflow profile: a name under the workflow's profiles/ (slurm) or a folder")
+    repair.add_argument("--memory", type=float, default=None, metavar="GB",
+                        help="memory the run may use (default: what is available when it starts); jobs that would "
+                        "not fit together wait, a library too large for it is refused before anything runs")
     repair.add_argument("--dry-run", "-n", action="store_true", help="only show what would run")
     return parser
 
@@ -60,6 +63,8 @@ def snakemake_command(args):
     if args.command == "report":
         return command + report_poses(args) + ["--report", f"reports/{library_name(args)}/report.html"]
     command += ["--cores", str(args.cores)]
+    if args.memory is not None:
+        command += ["--resources", f"mem_mb={int(args.memory * 1000)}"]
     if args.profile:
         command += ["--workflow-profile", str(profile_folder(args.profile))]
     return command + (["--dry-run", "--quiet", "rules"] if args.dry_run else [])
@@ -99,6 +104,8 @@ def argument_problem(args):
         return f"{args.library}: not a folder"
     if args.command == "repair" and args.cores < 1:
         return f"--cores {args.cores}: needs at least 1 core"
+    if args.command == "repair" and args.memory is not None and args.memory <= 0:
+        return f"--memory {args.memory:g}: needs more than 0 GB"
     if args.command == "repair" and args.profile and not profile_folder(args.profile).is_dir():
         shipped = ", ".join(sorted(p.name for p in (WORKFLOW / "profiles").iterdir() if p.is_dir()))
         return f"--profile {args.profile}: no such profile (shipped: {shipped}; or give a folder)"

@@ -1,0 +1,73 @@
+"""Memory a stage needs for a mesh of a given size: the rules' ``resources.mem_mb`` and the refusal, before a run
+starts, of a reference too large for the memory it may use.
+
+Only the workflow reads this module (``rules/common.smk``), no stage: a new measurement changes what the rules ask
+Snakemake for, and reruns nothing.
+"""
+
+PEAK_MB = {
+    "validate_reference": (115, 1.4), "validate": (115, 1.5), "keyframes": (120, 2.5), "classify": (105, 13),
+    "constraints": (100, 3.5), "integrate": (190, 0.4), "verify": (100, 22), "export": (115, 1.1),
+    "downstream": (270, 40), "skeleton": (135, 3.8), "repair_medial": (115, 6.3), "tet_mesh": (175, 0.8),
+    "repair_volumetric": (150, 22), "repair_contact": (65, 22), "export_baseline": (115, 1.9), "render": (150, 5),
+}
+"""Peak memory of each stage (Snakemake's max_rss) as MB at rest plus MB per 1000 reference vertices: the line
+through lion-01 (5.0k vertices) and kids-0001's 0001.isometry.1 (59.7k) with every repair, ``snakemake --cores 2``
+(reports/bench/memory.md, ``benchmarks/memory.py``); the subdivided kids pose (239k) stays below it, at most
+6 % above it before the margin. The fit's rule asks for its kernel cache's budget instead (config fit.memory_gb:
+the cache shrinks to what the job gets)."""
+OTHER_MB = (300, 10)
+"""The same for a stage not in PEAK_MB (the summary's, the authoring stages)."""
+MARGIN = 1.25
+"""Headroom over the measured line."""
+FLOOR_MB = 1000
+"""Least memory a rule asks for (Snakemake's own default: a cluster job never gets less)."""
+
+
+def stage_memory_mb(stage, vertices):
+    """Memory a stage needs for a reference of ``vertices`` vertices (MB, int): the rule's ``resources.mem_mb``.
+
+    Parameters
+    ----------
+    stage : str
+        Rule name (``classify``, ``repair_volumetric``, ...).
+    vertices : int
+        Vertex count of the reference (all poses share it).
+
+    Returns
+    -------
+    int
+        ``MARGIN`` times the measured line of the stage, at least ``FLOOR_MB``.
+
+    Examples
+    --------
+    >>> stage_memory_mb("validate", 0)
+    1000
+    """
+    base, per_thousand = PEAK_MB.get(stage, OTHER_MB)
+    return max(FLOOR_MB, int(MARGIN * (base + per_thousand * vertices / 1000)))
+
+
+def memory_problem(vertices, limit_mb):
+    """Why a reference of ``vertices`` vertices cannot be repaired in ``limit_mb`` MB, or None when it can.
+
+    Parameters
+    ----------
+    vertices : int
+    limit_mb : float
+        Memory the run may use (MB); 0 or less: no limit.
+
+    Returns
+    -------
+    str or None
+        ``"<n> vertices need about <x> GB in stage <s>, more than the <y> GB this run may use: ..."``.
+    """
+    if limit_mb <= 0:
+        return None
+    stage = max(PEAK_MB, key=lambda s: stage_memory_mb(s, vertices))
+    need = stage_memory_mb(stage, vertices)
+    if need <= limit_mb:
+        return None
+    return (f"{vertices} vertices need about {need / 1000:.1f} GB in stage {stage}, more than the "
+            f"{limit_mb / 1000:.1f} GB this run may use: free memory, give the run more (posefix repair --memory "
+            "GB, snakemake --resources mem_mb=MB) or repair a decimated reference")
