@@ -23,6 +23,14 @@ def posefix(*args, cwd):
     return subprocess.run([*command, *map(str, args)], capture_output=True, text=True, cwd=cwd, timeout=900)
 
 
+def ball_library(library):
+    """A library folder of a sphere and one pose of it, scaled: the folder."""
+    V, F = icosphere(2)
+    write_mesh(library / "ball-reference.obj", V, F)
+    write_mesh(library / "ball-01.obj", V * 1.1, F)
+    return library
+
+
 def test_help_says_each_default_once_and_in_words():
     assert "``" not in build_parser().format_help()
     from posefix.workflow.cli import stage_parser
@@ -51,10 +59,7 @@ def test_the_snakemake_command_line(tmp_path):
 
 @pytest.mark.pipeline
 def test_a_library_too_large_for_the_memory_given_is_refused_in_one_line_before_anything_runs(tmp_path):
-    library = tmp_path / "lib"
-    V, F = icosphere(2)
-    write_mesh(library / "ball-reference.obj", V, F)
-    write_mesh(library / "ball-01.obj", V * 1.1, F)
+    library = ball_library(tmp_path / "lib")
     proc = posefix("repair", library, "--memory", "0.2", cwd=tmp_path)
     assert proc.returncode != 0 and "Traceback" not in proc.stderr, proc.stderr
     lines = proc.stderr.splitlines()
@@ -96,10 +101,7 @@ def test_a_failed_run_ends_with_the_posefix_error_line(tmp_path):
 def test_a_second_run_in_a_folder_where_one_works_is_refused_in_one_line(tmp_path):
     """While a repair works in a folder, a second one started there stops at once with one line (no traceback), and
     leaves the first one's work alone."""
-    library = tmp_path / "lib"
-    V, F = icosphere(2)
-    write_mesh(library / "ball-reference.obj", V, F)
-    write_mesh(library / "ball-01.obj", V * 1.1, F)
+    library = ball_library(tmp_path / "lib")
     first = subprocess.Popen([sys.executable, "-m", "posefix.workflow.command", "repair", str(library), "--config",
                               "baselines=[]"], cwd=tmp_path, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
                              start_new_session=True)
@@ -159,10 +161,7 @@ def test_a_run_that_fails_before_any_stage_reports_says_why_in_one_line(log, lin
 
 @pytest.mark.pipeline
 def test_a_dry_run_shows_the_jobs_it_would_run(tmp_path):
-    library = tmp_path / "lib"
-    V, F = icosphere(2)
-    write_mesh(library / "ball-reference.obj", V, F)
-    write_mesh(library / "ball-01.obj", V * 1.1, F)
+    library = ball_library(tmp_path / "lib")
     proc = posefix("repair", library, "-n", "--config", "baselines=[]", cwd=tmp_path)
     assert proc.returncode == 0, proc.stderr[-3000:]
     lines = proc.stdout.splitlines()
