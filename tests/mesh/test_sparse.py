@@ -1,5 +1,8 @@
 """The sparse direct solver: exact on a Laplacian system, the same in symmetric mode, singular matrices refused;
-a fill-reducing order computed once gives the ordering's fill."""
+a fill-reducing order computed once gives the ordering's fill; the Cholesky back end (CHOLMOD, or SuperLU's symmetric
+mode without it) solves the same system, one or many right-hand sides."""
+
+import builtins
 
 import numpy as np
 import pytest
@@ -7,7 +10,7 @@ import scipy.sparse as sp
 
 from conftest import icosphere
 from posefix.mesh.laplacian import cotangent_laplacian
-from posefix.mesh.sparse import factorized, fill_reducing_order
+from posefix.mesh.sparse import cholesky_factorized, factorized, fill_reducing_order
 
 
 def _pinned_laplacian():
@@ -41,3 +44,29 @@ def test_a_fill_reducing_order_computed_once_keeps_the_orderings_fill():
     x = np.empty_like(b)
     x[p] = ordered.solve(b[p])
     assert np.abs(A @ x - b).max() < 1e-10 * np.abs(b).max()
+
+
+def _without_cholmod(monkeypatch):
+    real_import = builtins.__import__
+
+    def refuse(name, *args, **kwargs):
+        if name.startswith("sksparse"):
+            raise ImportError(name)
+        return real_import(name, *args, **kwargs)
+
+    monkeypatch.setattr(builtins, "__import__", refuse)
+
+
+@pytest.mark.parametrize("back_end", ["cholmod", "superlu"])
+def test_the_cholesky_back_ends_solve_a_pinned_cotangent_laplacian(back_end, monkeypatch):
+    if back_end == "cholmod":
+        pytest.importorskip("sksparse.cholmod", reason="scikit-sparse (CHOLMOD) is not installed: `make` builds it")
+    else:
+        _without_cholmod(monkeypatch)
+    A, b = _pinned_laplacian()
+    solver = cholesky_factorized(A)
+    x = solver.solve(b)
+    assert np.abs(A @ x - b).max() < 1e-10 * np.abs(b).max()
+    assert np.abs(A @ solver.solve(b[:, 0]) - b[:, 0]).max() < 1e-10 * np.abs(b).max()
+    ordered = cholesky_factorized(A, fill_reducing_order(A)).solve(b)
+    assert np.abs(ordered - x).max() < 1e-10 * np.abs(x).max()
