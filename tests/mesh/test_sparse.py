@@ -10,6 +10,7 @@ import scipy.sparse as sp
 
 from conftest import icosphere
 from posefix.mesh.laplacian import cotangent_laplacian
+from posefix.mesh import sparse
 from posefix.mesh.sparse import cholesky_factorized, factorized, fill_reducing_order
 
 
@@ -55,14 +56,16 @@ def _without_cholmod(monkeypatch):
         return real_import(name, *args, **kwargs)
 
     monkeypatch.setattr(builtins, "__import__", refuse)
+    sparse._cholmod_analyze.cache_clear()
 
 
 @pytest.mark.parametrize("back_end", ["cholmod", "superlu"])
-def test_the_cholesky_back_ends_solve_a_pinned_cotangent_laplacian(back_end, monkeypatch):
+def test_the_cholesky_back_ends_solve_a_pinned_cotangent_laplacian(back_end, monkeypatch, request, caplog):
     if back_end == "cholmod":
         pytest.importorskip("sksparse.cholmod", reason="scikit-sparse (CHOLMOD) is not installed: `make` builds it")
     else:
         _without_cholmod(monkeypatch)
+        request.addfinalizer(sparse._cholmod_analyze.cache_clear)
     A, b = _pinned_laplacian()
     solver = cholesky_factorized(A)
     x = solver.solve(b)
@@ -70,3 +73,4 @@ def test_the_cholesky_back_ends_solve_a_pinned_cotangent_laplacian(back_end, mon
     assert np.abs(A @ solver.solve(b[:, 0]) - b[:, 0]).max() < 1e-10 * np.abs(b).max()
     ordered = cholesky_factorized(A, fill_reducing_order(A)).solve(b)
     assert np.abs(ordered - x).max() < 1e-10 * np.abs(x).max()
+    assert ("CHOLMOD) is not installed" in caplog.text) == (back_end == "superlu")

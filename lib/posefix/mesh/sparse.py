@@ -7,11 +7,15 @@ the large symmetric positive definite systems (the contact solver's Newton steps
 Cholesky (scikit-sparse, SuiteSparse) when it is installed, SuperLU's symmetric mode otherwise.
 """
 
+import functools
+import logging
 from types import SimpleNamespace
 
 import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.linalg import splu
+
+log = logging.getLogger(__name__)
 
 
 def factorized(A, ordering="COLAMD", symmetric=False):
@@ -77,11 +81,22 @@ def cholesky_factorized(A, order=None):
     [1.0, 1.0]
     """
     A = sp.csc_matrix(A)
+    analyze = _cholmod_analyze()
+    if analyze is None:
+        return _superlu_cholesky(A, fill_reducing_order(A) if order is None else order)
+    return SimpleNamespace(solve=analyze(A, mode="supernodal", ordering_method="amd").cholesky(A).solve_A)
+
+
+@functools.cache
+def _cholmod_analyze():
+    """scikit-sparse's ``cholmod.analyze``, or None (and a warning, once per process) when it is not installed."""
     try:
         from sksparse.cholmod import analyze
     except ImportError:
-        return _superlu_cholesky(A, fill_reducing_order(A) if order is None else order)
-    return SimpleNamespace(solve=analyze(A, mode="supernodal", ordering_method="amd").cholesky(A).solve_A)
+        log.warning("WARNING: scikit-sparse (CHOLMOD) is not installed: SuperLU factorizes the large systems, "
+                    "slower (`make` installs it)")
+        return None
+    return analyze
 
 
 def _superlu_cholesky(A, order):
