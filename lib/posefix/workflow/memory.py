@@ -14,7 +14,7 @@ PEAK_MB = {
 """Peak memory of each stage (Snakemake's max_rss) as MB at rest plus MB per 1000 reference vertices: the line
 through lion-01 (5.0k vertices) and kids-0001's 0001.isometry.1 (59.7k) with every repair, ``snakemake --cores 2``
 (reports/bench/memory.md, ``benchmarks/memory.py``); the kids pose subdivided to 239k vertices stays within the
-margin (at most 18 % above the line: keyframes) in the stages it ran, verify's 4.3 GB included. The skeleton's and
+margin (at most 18 % above the line: keyframes) in the stages it ran, verify's 4.1 GB included. The skeleton's and
 the volumetric repair's lines are the latest run's (f2b5d3f: up to 37 % above the run before); the others that
 run's (the latest peaks at most 6 % above them). The fit's rule asks for its kernel cache's budget instead (config
 fit.memory_gb: the cache shrinks to what the job gets)."""
