@@ -214,8 +214,9 @@ class ContactSolver:
         keep_ee, keep_fv = self._kept(ee, ee_keys, fv, fv_keys)
         keep_ee &= near[E[ee]].any(axis=(1, 2))
         keep_fv &= near[F[fv[:, 0]]].any(axis=1) | near[fv[:, 1]]
-        ee_dist = np.sqrt([c.ee_candidates[i].compute_distance(V, E, F) for i in np.flatnonzero(keep_ee)])
-        fv_dist = np.sqrt([c.fv_candidates[i].compute_distance(V, E, F) for i in np.flatnonzero(keep_fv)])
+        ee_c, fv_c = c.ee_candidates, c.fv_candidates  # (each read copies the whole list)
+        ee_dist = np.sqrt([ee_c[i].compute_distance(V, E, F) for i in np.flatnonzero(keep_ee)])
+        fv_dist = np.sqrt([fv_c[i].compute_distance(V, E, F) for i in np.flatnonzero(keep_fv)])
         return (np.unique(ee_keys[keep_ee][ee_dist < limit].astype(np.int64)),
                 np.unique(fv_keys[keep_fv][fv_dist < limit].astype(np.int64)))
 
