@@ -74,3 +74,14 @@ def test_the_cholesky_back_ends_solve_a_pinned_cotangent_laplacian(back_end, mon
     ordered = cholesky_factorized(A, fill_reducing_order(A)).solve(b)
     assert np.abs(ordered - x).max() < 1e-10 * np.abs(x).max()
     assert ("CHOLMOD) is not installed" in caplog.text) == (back_end == "superlu")
+
+
+@pytest.mark.parametrize("back_end", ["cholmod", "superlu"])
+def test_the_cholesky_back_ends_refuse_a_singular_matrix_alike(back_end, monkeypatch, request):
+    if back_end == "cholmod":
+        pytest.importorskip("sksparse.cholmod", reason="scikit-sparse (CHOLMOD) is not installed: `make` builds it")
+    else:
+        _without_cholmod(monkeypatch)
+        request.addfinalizer(sparse._cholmod_analyze.cache_clear)
+    with pytest.raises(np.linalg.LinAlgError):  # singular: a zero pivot
+        cholesky_factorized(sp.csc_matrix(np.diag([1.0, 0.0])))

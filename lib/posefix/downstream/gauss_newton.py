@@ -11,7 +11,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from posefix.mesh.geometry import face_areas
-from posefix.mesh.sparse import factorized, fill_reducing_order
+from posefix.mesh.sparse import cholesky_factorized, fill_reducing_order
 from posefix.mesh.tolerances import TINY
 
 log = logging.getLogger(__name__)
@@ -66,8 +66,9 @@ class SolverSettings:
 def gauss_newton(energy, V0, handles, handle_positions, F, settings=None):
     """Minimize a :class:`ShellEnergy` by Gauss–Newton with step halving, handles fixed.
 
-    Each iteration solves J^T J d = -J^T r over the free coordinates (sparse LU, :func:`unknowns`) and takes the
-    first of the steps 1, 1/2, ... that lowers the energy; when it stops and why: :class:`SolverSettings`.
+    Each iteration solves J^T J d = -J^T r over the free coordinates (:func:`unknowns`) by sparse Cholesky
+    (:func:`~posefix.mesh.sparse.cholesky_factorized`) and takes the first of the steps 1, 1/2, ... that lowers
+    the energy; when it stops and why: :class:`SolverSettings`.
 
     Parameters
     ----------
@@ -188,9 +189,9 @@ def _step(J, g):
     """
     H = (J.T @ J).tocsr()  # sorted indices; symmetric, so its CSR arrays are its CSC arrays
     try:
-        lu = factorized(sp.csc_matrix((H.data, H.indices, H.indptr), shape=H.shape), ordering="NATURAL",
-                        symmetric=True)
-    except RuntimeError:  # exactly singular
+        factor = cholesky_factorized(sp.csc_matrix((H.data, H.indices, H.indptr), shape=H.shape),
+                                     np.arange(H.shape[0]))
+    except np.linalg.LinAlgError:  # not positive definite
         return None
-    d = lu.solve(-g)
+    d = factor.solve(-g)
     return d if np.all(np.isfinite(d)) else None

@@ -74,6 +74,11 @@ def cholesky_factorized(A, order=None):
     object
         ``.solve(b)`` with ``b`` (n,) or (n, k) float.
 
+    Raises
+    ------
+    numpy.linalg.LinAlgError
+        ``A`` is not (numerically) positive definite.
+
     Examples
     --------
     >>> import numpy as np, scipy.sparse as sp
@@ -84,7 +89,12 @@ def cholesky_factorized(A, order=None):
     analyze = _cholmod_analyze()
     if analyze is None:
         return _superlu_cholesky(A, fill_reducing_order(A) if order is None else order)
-    return SimpleNamespace(solve=analyze(A, mode="supernodal", ordering_method="amd").cholesky(A).solve_A)
+    from sksparse.cholmod import CholmodNotPositiveDefiniteError  # loaded already: analyze comes from it
+
+    try:
+        return SimpleNamespace(solve=analyze(A, mode="supernodal", ordering_method="amd").cholesky(A).solve_A)
+    except CholmodNotPositiveDefiniteError as error:
+        raise np.linalg.LinAlgError(str(error)) from error
 
 
 @functools.cache
@@ -100,8 +110,12 @@ def _cholmod_analyze():
 
 
 def _superlu_cholesky(A, order):
-    """SuperLU's symmetric factorization of ``A`` (n, n) in the elimination ``order`` (n,), as ``.solve(b)``."""
-    lu = factorized(A[order][:, order], "NATURAL", symmetric=True)
+    """SuperLU's symmetric factorization of ``A`` (n, n) in the elimination ``order`` (n,), as ``.solve(b)``;
+    numpy.linalg.LinAlgError when ``A`` is exactly singular."""
+    try:
+        lu = factorized(A[order][:, order], "NATURAL", symmetric=True)
+    except RuntimeError as error:
+        raise np.linalg.LinAlgError(str(error)) from error
 
     def solve(b):
         x = np.empty_like(b, dtype=np.float64)
