@@ -14,6 +14,7 @@ from types import SimpleNamespace
 import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.linalg import splu
+from threadpoolctl import threadpool_info, threadpool_limits
 
 log = logging.getLogger(__name__)
 
@@ -99,13 +100,18 @@ def cholesky_factorized(A, order=None):
 
 @functools.cache
 def _cholmod_analyze():
-    """scikit-sparse's ``cholmod.analyze``, or None (and a warning, once per process) when it is not installed."""
+    """scikit-sparse's ``cholmod.analyze``, or None (and a warning, once per process) when it is not installed.
+
+    The BLAS and OpenMP that CHOLMOD loads get the thread limit in force (a stage's ``--threads``, one per
+    worker process), which ``threadpoolctl`` set on the libraries loaded before them."""
+    limit = min((info["num_threads"] for info in threadpool_info()), default=None)
     try:
         from sksparse.cholmod import analyze
     except ImportError:
         log.warning("WARNING: scikit-sparse (CHOLMOD) is not installed: SuperLU factorizes the large systems, "
                     "slower (`make` installs it)")
         return None
+    threadpool_limits(limits=limit)
     return analyze
 
 
