@@ -25,7 +25,7 @@ def test_what_cannot_fit_is_said_with_the_stage_that_needs_most():
     assert memory_problem(5000, 100_000) is None
     stage = max(PEAK_MB, key=lambda s: stage_memory_mb(s, 240_000))
     need = stage_memory_mb(stage, 240_000)
-    line = memory_problem(240_000, 8000)
-    assert line.startswith(f"240000 vertices need about {need / 1000:.1f} GB in stage {stage}, more than the 8.0 GB "
+    line = memory_problem(240_000, 6000)
+    assert line.startswith(f"240000 vertices need about {need / 1000:.1f} GB in stage {stage}, more than the 6.0 GB "
                            "this run may use: ")
     assert memory_problem(240_000, need) is None

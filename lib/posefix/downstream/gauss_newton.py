@@ -66,9 +66,8 @@ class SolverSettings:
 def gauss_newton(energy, V0, handles, handle_positions, F, settings=None):
     """Minimize a :class:`ShellEnergy` by Gauss–Newton with step halving, handles fixed.
 
-    Each iteration solves J^T J d = -J^T r over the free coordinates (:func:`unknowns`) by sparse Cholesky
-    (:func:`~posefix.mesh.sparse.cholesky_factorized`) and takes the first of the steps 1, 1/2, ... that lowers
-    the energy; when it stops and why: :class:`SolverSettings`.
+    Each iteration solves J^T J d = -J^T r over the free coordinates (:func:`unknowns`, sparse Cholesky) and takes
+    the first of the steps 1, 1/2, ... that lowers the energy; when it stops and why: :class:`SolverSettings`.
 
     Parameters
     ----------
