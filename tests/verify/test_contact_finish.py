@@ -126,7 +126,8 @@ def test_where_the_target_undoes_the_references_own_intersection_that_region_tak
     """A 5 x 5 sheet stands through a 9 x 9 one in the reference (tolerated) and clear of it in the target (moved
     0.8 along x, past its edge): no intersection-free motion from the integrated pose (the reference) slides it
     out through the other sheet's clean faces, so the region around the reference's own intersection, grown by
-    rings until it adds none, takes the target's positions (flag 2)."""
+    rings until it adds none, takes the target's positions (flag 2). The constrained vertices held off their
+    targets by contacts with the region before it moved are exact after it (7 were 4.8e-7 off)."""
     A, FA = grid_sheet(9, 0.0)
     U, FB = grid_sheet(5, 0.0)
     B = np.column_stack([np.full(len(U), 0.55), 0.3 + 0.4 * U[:, 0], -0.2 + 0.4 * U[:, 1]])
@@ -137,5 +138,5 @@ def test_where_the_target_undoes_the_references_own_intersection_that_region_tak
     problem = RepairProblem.build(V, target, F, np.ones(len(V), bool), pairs)
     result = finish_pose(problem, np.stack([V, V]), 1.0, ContactSolver(V, F, problem.reference_faces))
     assert result.metrics["repaired_new"] == 0 and result.metrics["contact_untangled"] == len(B)
-    assert np.abs(result.X - target).max() < 1e-6
+    assert np.array_equal(result.X, target)
     assert ((result.replaced & REPLACED_NEW_INTERSECTION) > 0).sum() == len(B)

@@ -18,8 +18,9 @@ toward its goal, through intersection-free shapes only (:mod:`posefix.mesh.conta
    allows the (small) move. The constrained vertices of the reference's own intersecting faces (which the
    integrated pose inherits; the target may have undone them) are pulled with the free region's weight, as no
    intersection-free motion need reach them, and put on their targets in one step where the exact detector
-   finds no new intersecting face, with the rings around them that this needs (flag 2); where no ring does, they
-   are pulled with V_C's weight from there.
+   finds no new intersecting face, with the rings around them that this needs (flag 2), and the constrained
+   vertices no longer in a barrier pair then are put on their targets too; where no ring does, they are pulled
+   with V_C's weight from there.
 5. **Check**: the exact detector checks the result. CCD bounds every step, but degenerate steps (a straight
    Newton step that crushes triangles to zero area, where Additive CCD warns of gaps below its precision)
    can miss a crossing; then the finish is reverted to the latest intersection-free sample of the path
@@ -117,8 +118,11 @@ def contact_finish(problem, solver, samples, settings=FinishSettings()):
     locked = _locked_vertices(problem)
     weights = np.where(problem.mask & ~locked, settings.constrained_weight, 1.0)
     result = solver.compute_pose(start, goal, weights, shape=shape)
-    X, exact = _exact_constrained(problem, solver, result, locked)
+    X, exact = _exact_constrained(problem, solver, result.X, result.contact, locked)
     X, exact, untangled = _untangled(problem, X, exact, locked, settings.untangle_rings)
+    if untangled.any():  # contacts with the untangled region have changed: V_C away from the new ones is exact
+        result.contact = solver.contact_vertices(solver.collisions(X), len(X))
+        X, exact = _exact_constrained(problem, solver, X, result.contact, locked & ~exact)
     if (locked & ~exact).any():
         result, X, exact = _released(problem, solver, result, X, (goal, shape), settings.constrained_weight)
     pairs = self_intersecting_pairs(X, problem.F)
@@ -216,18 +220,19 @@ def _released(problem, solver, result, X, goals, weight):
     released = solver.compute_pose(X, goal, np.where(problem.mask, weight, 1.0), shape=shape)
     released.iterations += result.iterations
     released.seconds += result.seconds
-    X, exact = _exact_constrained(problem, solver, released, np.zeros(len(X), dtype=bool))
+    X, exact = _exact_constrained(problem, solver, released.X, released.contact, np.zeros(len(X), dtype=bool))
     return released, X, exact
 
 
-def _exact_constrained(problem, solver, result, locked):
-    """Put the constrained vertices of no barrier pair, not ``locked`` (n,), exactly on their targets if CCD
-    allows the move."""
-    exact = problem.mask & ~result.contact & ~locked
-    Y = result.X.copy()
-    Y[exact] = problem.V_tgt[exact]
-    step = solver.collision_free_step(result.X, Y)
+def _exact_constrained(problem, solver, X, contact, locked):
+    """``(X (n, 3), exact (n,) bool)``: the constrained vertices of ``X`` in no barrier pair (``contact`` (n,)
+    bool) and not ``locked`` (n,) put exactly on their targets if CCD allows the move; ``exact``: the constrained
+    vertices on their targets."""
+    Y = X.copy()
+    move = problem.mask & ~contact & ~locked
+    Y[move] = problem.V_tgt[move]
+    step = solver.collision_free_step(X, Y)
     if step < 1.0:
         log.info("contact finish: the exact V_C move would touch a contact (CCD step %.3f); kept the solver's", step)
-        return result.X, problem.mask & (result.X == problem.V_tgt).all(axis=1)
-    return Y, exact
+        Y = X
+    return Y, problem.mask & (Y == problem.V_tgt).all(axis=1)
