@@ -202,6 +202,7 @@ def report(info, benchmarks, note, out):
               "Per pose: `detector-<library>.md`.", ""]
     lines += (out / "skeletal.md").read_text().splitlines() + [""]
     lines += (out / "repairs.md").read_text().splitlines() + [""]
+    lines += (out / "vc-exact.md").read_text().splitlines() + [""]
     lines += (out / "volumetric.md").read_text().splitlines() + [""]
     if (out / "markers.md").exists():  # horse-gallop present
         lines += (out / "markers.md").read_text().splitlines() + [""]
@@ -226,6 +227,7 @@ def main():
     blocked_vs_full_figure(benchmarks).savefig(out / "blocked_vs_full.png", metadata={"Software": None})
     run(sys.executable, ROOT / "benchmarks" / "skeletal.py", "--out", out, "--threads", args.cores)
     run(sys.executable, ROOT / "benchmarks" / "repairs.py", "--out", out, "--cores", args.cores)
+    run(sys.executable, ROOT / "benchmarks" / "vc_exact.py", "--out", out)  # on repairs.py's results
     run(sys.executable, ROOT / "benchmarks" / "volumetric.py", "--out", out, "--threads", args.cores)
     run(sys.executable, ROOT / "benchmarks" / "markers.py", "--out", out, "--threads", args.cores)
     run(sys.executable, ROOT / "benchmarks" / "accuracy.py", "--out", out)
