@@ -2,7 +2,7 @@
 
 Writes reports/bench/downstream.md and downstream.json. For each pose (a results folder with keyframes.h5 and
 verify.h5; by default lion-01 and camel-01, which `make bench` repairs first): the whole grid of the downstream
-check (config.yaml's alphas x k_bend, towards the original and the repaired pose) with the library of an older
+check (posefix.downstream.check.GRID, alphas x k_bend, towards the original and the repaired pose) with the library of an older
 revision (``--old``, exported with ``git archive``) and with this one, one run after the other, each in a fresh
 process with one BLAS thread; this one also with 2 workers (downstream.threads). Wall and CPU seconds (the
 workers' included), converged runs and iterations.
@@ -20,14 +20,17 @@ import tempfile
 import time
 from pathlib import Path
 
+from posefix.downstream.check import GRID
+
 ROOT = Path(__file__).resolve().parents[1]
 OLD = "5302533"
 """The last revision with the CG-preconditioned solver (one ordering per factorization, serial grid)."""
 POSES = ("results/lion-poses/lion-01", "results/camel-poses/camel-01")
 
 
-def run_check(folder, workers):
-    """One downstream check of the pose in ``folder`` with the importable posefix (dict, printed as JSON)."""
+def run_check(folder, workers, grid):
+    """One downstream check of the pose in ``folder`` over ``grid`` (alphas, k_bend) with the importable posefix
+    (dict, printed as JSON)."""
     import h5py
     from threadpoolctl import threadpool_limits
 
@@ -40,7 +43,7 @@ def run_check(folder, workers):
     extra = {"workers": workers} if workers > 1 else {}
     with threadpool_limits(1):
         start, cpu = time.perf_counter(), time.process_time()
-        check = downstream_check(V_ref, F, {"original": target, "repaired": repaired}, **extra)
+        check = downstream_check(V_ref, F, {"original": target, "repaired": repaired}, **grid, **extra)
         seconds = time.perf_counter() - start
     cpu = time.process_time() - cpu + resource.getrusage(resource.RUSAGE_CHILDREN).ru_utime
     digest = hashlib.sha256(b"".join(r.V.tobytes() + r.errors.tobytes() for r in check.runs)).hexdigest()[:16]
@@ -51,7 +54,8 @@ def run_check(folder, workers):
 def measure(folder, lib, workers):
     """:func:`run_check` in a fresh process importing posefix from ``lib``."""
     env = {**os.environ, "PYTHONPATH": str(lib)}
-    out = subprocess.run([sys.executable, __file__, "--run", str(folder), "--workers", str(workers)], env=env,
+    out = subprocess.run([sys.executable, __file__, "--run", str(folder), "--workers", str(workers),
+                          "--grid", json.dumps(GRID)], env=env,
                          check=True, capture_output=True, text=True).stdout
     return json.loads(out.strip().splitlines()[-1])
 
@@ -101,9 +105,10 @@ def main():
     parser.add_argument("--out", default=str(ROOT / "reports" / "bench"))
     parser.add_argument("--run", default=None, help=argparse.SUPPRESS)  # one check, in a child process
     parser.add_argument("--workers", type=int, default=1, help=argparse.SUPPRESS)
+    parser.add_argument("--grid", type=json.loads, default=None, help=argparse.SUPPRESS)  # this revision's GRID
     args = parser.parse_args()
     if args.run:
-        print(json.dumps(run_check(args.run, args.workers)))
+        print(json.dumps(run_check(args.run, args.workers, args.grid)))
         return
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)

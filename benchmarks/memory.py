@@ -1,7 +1,7 @@
 """Peak memory and disk per stage, from 5k to 240k vertices (`.venv/bin/python benchmarks/memory.py`):
 reports/bench/memory.md.
 
-One pose of each case end to end with ``snakemake --cores N`` (one downstream setting, as ``make run``): lion-01
+One pose of each case end to end with ``snakemake --cores N`` (the default one downstream setting): lion-01
 (5.0k vertices) and kids-0001's 0001.isometry.1 (59.7k, ``0001.null.0.off.gz`` as reference) with every repair,
 and that kids pose and its reference subdivided at the edge midpoints (238.8k vertices, written to
 ``results/bench-inputs/kids240``) with S0 alone. Per stage: wall seconds and peak memory (Snakemake's benchmark
@@ -38,7 +38,6 @@ CASES = {  # name -> (library folder, reference, pose, baselines)
 ORDER = ("validate_reference", "validate", "keyframes", "classify", "constraints", "fit", "integrate", "verify",
          "export", "downstream", "skeleton", "repair_medial", "export_medial", "tet_mesh", "repair_volumetric",
          "export_volumetric", "repair_contact", "export_contact", "render")
-DOWNSTREAM = "downstream={'alphas': [1.0], 'k_bend': [0.01]}"
 
 
 def subdivided_kids(folder):
@@ -61,7 +60,7 @@ def run_case(name, cores, root, run=True, extra=()):
         if name == "kids240":
             subdivided_kids(folder)
         cmd = [sys.executable, "-m", "snakemake", "-s", str(ROOT / "Snakefile"), "--cores", str(cores), "--config",
-               f"library={folder}", f"reference={reference}", f"poses={pose}", DOWNSTREAM]
+               f"library={folder}", f"reference={reference}", f"poses={pose}"]
         cmd += ([f"baselines={baselines}"] if baselines else []) + list(extra)
         print("+", " ".join(cmd), flush=True)
         subprocess.run(cmd, cwd=root, check=True)

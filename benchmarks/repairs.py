@@ -6,8 +6,8 @@ targets: space-time integration (S0) with the snap finish and with the contact f
 repair (the IPC contact solver through S0's key frames). The pipeline runs twice per library in one go: with
 the contact finish and every baseline (results/<library>), then with the snap finish alone
 (results/<library>-snap-finish, from the first run's artifacts up to integrate), the downstream check towards every repaired pose both times
-(``downstream.baselines: true``; Snakemake reuses what is up to date; ``--quick-downstream``: one setting of
-the grid, alpha 1 and k_b 1e-2, as ``make run``). One table from the summary.json files:
+(``downstream.baselines: true``; Snakemake reuses what is up to date; ``--quick-downstream``: the default one setting,
+alpha 1 and k_b 1e-2, instead of the grid). One table from the summary.json files:
 poses with no new intersecting face (S0's snap: outside its pass-through regions), poses "ok" (clean, V_C
 within the bar, no distorted face), deviation from the target over V_C and over the free vertices (relative
 to the bbox diagonal), the worst edge-length and area ratios against the target and the distorted faces,
@@ -26,14 +26,16 @@ from pathlib import Path
 
 import numpy as np
 
+from posefix.downstream.check import GRID
 from posefix.workflow.timings import benchmark_seconds
 from posefix.report.tables import pose_status, repair_seconds
 
 ROOT = Path(__file__).resolve().parents[1]
 DATA = Path(os.environ.get("POSEFIX_DATA", ROOT.parent / "shared" / "data"))
 LIBRARIES = ("lion-poses", "cat-poses", "horse-poses", "camel-poses")
-CHECK_BASELINES = "downstream={'baselines': True}"
-QUICK_DOWNSTREAM = "downstream={'baselines': True, 'alphas': [1.0], 'k_bend': [0.01]}"
+CHECK_BASELINES = f"downstream={ {'baselines': True, **GRID} }"
+"""The downstream check towards every repair over the grid of six settings (``make bench``)."""
+QUICK_DOWNSTREAM = "downstream={'baselines': True}"
 CONTACT_FINISH = "verify={'finish': 'contact'}"
 SNAP_FINISH = ("verify={'finish': 'snap'}", "baselines=[]")
 """The second run of a library: S0 with the snap finish, no baselines (they are the first run's)."""

@@ -77,27 +77,13 @@ def run_stage(name, *args, check=True):
     return proc
 
 
-# The downstream check (Gauss-Newton discrete shells) on one setting instead of config.yaml's grid of
-# six: the grid costs 2-3 minutes per demo pose on 2 cores, one setting 15-20 s (as in `make run`).
-QUICK_DOWNSTREAM = "downstream={'alphas': [1.0], 'k_bend': [0.01]}"
-
-
-def with_quick_downstream(args):
-    """Snakemake arguments with ``QUICK_DOWNSTREAM`` added to their ``--config`` (or a new one)."""
-    args = [str(a) for a in args]
-    if "--config" in args:
-        i = args.index("--config") + 1
-        return args[:i] + [QUICK_DOWNSTREAM] + args[i:]
-    return args + ["--config", QUICK_DOWNSTREAM]
-
-
 @pytest.fixture(scope="session")
 def demo_run(tmp_path_factory):
     """The workflow on the demo library, run locally (``snakemake --cores 2``) once per session: the
     folder it ran in. Read-only for its users (test_workflow, and test_cluster's reference run)."""
     work = tmp_path_factory.mktemp("demo-run")
     cmd = [sys.executable, "-m", "snakemake", "-s", str(ROOT / "Snakefile"), "--directory", str(work),
-           *with_quick_downstream(["--cores", "2"])]
+           "--cores", "2"]
     proc = subprocess.run(cmd, capture_output=True, text=True, timeout=900)
     assert proc.returncode == 0, proc.stderr[-3000:]
     return work

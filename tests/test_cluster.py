@@ -30,7 +30,7 @@ import time
 import pytest
 import yaml
 
-from conftest import ROOT, with_quick_downstream
+from conftest import ROOT
 
 pytestmark = [
     pytest.mark.cluster,
@@ -161,7 +161,7 @@ class BackgroundRun(threading.Thread):
     def _workflow(self):
         cmd = [sys.executable, "-m", "snakemake", "-s", ROOT / "Snakefile", "--directory", self.work,
                "--workflow-profile", PROFILE, *TEST_OPTIONS, *_node_options(self.env)]
-        cmd = with_quick_downstream(cmd + (["--config", f"poses={POSES}"] if POSES != "all" else []))
+        cmd = cmd + (["--config", f"poses={POSES}"] if POSES != "all" else [])
         watch = _QueueWatch(self.env)
         watch.start()
         start = time.monotonic()

@@ -14,7 +14,7 @@ import time
 import numpy as np
 import pytest
 
-from conftest import ROOT, icosphere, split_along_a_seam, with_quick_downstream
+from conftest import ROOT, icosphere, split_along_a_seam
 from posefix.io.meshes import write_mesh
 
 pytestmark = pytest.mark.pipeline
@@ -45,7 +45,7 @@ def balls(folder, names):
 
 def command(checkout, work, *args):
     return [sys.executable, "-m", "snakemake", "-s", str(checkout / "Snakefile"), "--directory", str(work),
-            *with_quick_downstream(["--cores", "2", *args])]
+            "--cores", "2", *map(str, args)]
 
 
 def run(checkout, work, *args):

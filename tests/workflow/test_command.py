@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from conftest import QUICK_DOWNSTREAM, icosphere
+from conftest import icosphere
 from posefix.workflow.command import (WORKFLOW, build_parser, failed_job_errors, failure_line, recap_line,
                                       snakemake_command)
 from posefix.io.meshes import write_mesh
@@ -70,14 +70,19 @@ def test_a_library_too_large_for_the_memory_given_is_refused_in_one_line_before_
 
 @pytest.mark.pipeline
 def test_posefix_repair_from_another_folder_matches_the_workflow_run(demo_run, tmp_path):
-    proc = posefix("repair", demo_run / "data" / "demo", "--config", QUICK_DOWNSTREAM, "poses=demo-01",
+    proc = posefix("repair", demo_run / "data" / "demo", "--config", "poses=demo-01",
                    cwd=tmp_path)
     assert proc.returncode == 0, proc.stderr[-3000:]
-    assert "steps (100%) done" in proc.stdout and len(proc.stdout.splitlines()) < 200
+    lines = proc.stdout.splitlines()
+    assert lines[0].startswith("posefix: ") and lines[0].endswith(" jobs to run") and len(lines) < 20, lines
+    assert any(line.endswith(" jobs done (100%)") for line in lines), lines
+    assert lines[-4].startswith("posefix: 1 poses repaired: ") and lines[-3].startswith("  demo-01: "), lines
+    assert lines[-2:] == ["posefix: repaired meshes: results/demo/repaired",
+                          "posefix: summary page: reports/demo/summary.html"], lines
     name = "results/demo/repaired/demo-01.obj"
     assert (tmp_path / name).read_bytes() == (demo_run / name).read_bytes()
     assert list((tmp_path / "posefix-logs").glob("repair-*.log"))
-    proc = posefix("report", demo_run / "data" / "demo", "--config", QUICK_DOWNSTREAM, "poses=demo-01",
+    proc = posefix("report", demo_run / "data" / "demo", "--config", "poses=demo-01",
                    cwd=tmp_path)
     assert proc.returncode == 0, proc.stderr[-3000:]
     assert (tmp_path / "reports" / "demo" / "report.html").stat().st_size > 100_000

@@ -10,18 +10,23 @@ removes stale locks and its default profile reruns incomplete jobs.
 
 import argparse
 import json
+import queue
 import re
 import signal
 import subprocess
 import sys
+import threading
 import time
 from pathlib import Path
+
+from posefix.report.tables import pose_status
+from posefix.workflow.progress import RunProgress
 
 WORKFLOW = Path(__file__).resolve().parents[3]
 """The checkout the package is installed from (``pip install -e``): Snakefile, rules, stages, profiles."""
 
-SHOWN = re.compile(r"^(posefix\b|\d+ of \d+ steps|Nothing to be done|This was a dry-run"
-                   r"|[\d:]+ posefix [\w-]+: warning:)")
+SHOWN = re.compile(r"^(posefix\b|Nothing to be done|This was a dry-run|[\d:]+ posefix [\w-]+: warning:)")
+"""Snakemake's output lines shown as they are (the progress: :class:`~posefix.workflow.progress.RunProgress`)."""
 
 FAILURES = (
     (re.compile(r"LockException|Directory cannot be locked"),
@@ -43,7 +48,8 @@ def build_parser():
     repair = commands.add_parser("repair", help="repair a pose library (the whole workflow)")
     report = commands.add_parser("report", help="the HTML report of a repaired library")
     for sub in (repair, report):
-        sub.add_argument("library", help="folder of the pose library (a reference and its poses)")
+        sub.add_argument("library", nargs="?", default=None,
+                         help="folder of the pose library (a reference and its poses); none: the built-in demo")
         sub.add_argument("--config", nargs="+", default=[], metavar="KEY=VALUE",
                          help="config overrides, as snakemake --config (e.g. reference=a.obj poses=b,c)")
     repair.add_argument("--cores", type=int, default=2, help="cores to use (default 2)")
@@ -58,8 +64,9 @@ def build_parser():
 
 def snakemake_command(args):
     """The snakemake command line (list of str) for parsed ``args``."""
-    command = [sys.executable, "-m", "snakemake", "-s", str(WORKFLOW / "Snakefile"),
-               "--config", f"library={Path(args.library).resolve()}", *args.config]
+    library = [f"library={Path(args.library).resolve()}"] if args.library else []
+    command = [sys.executable, "-m", "snakemake", "-s", str(WORKFLOW / "Snakefile"), "--config", *library,
+               *args.config]
     if args.command == "report":
         return command + report_poses(args) + ["--report", f"reports/{library_name(args)}/report.html"]
     command += ["--cores", str(args.cores)]
@@ -85,9 +92,12 @@ def report_poses(args):
 
 
 def library_name(args):
-    """The library's name in results/ and reports/: ``name=`` of ``--config`` if given, else the folder's name."""
+    """The library's name in results/ and reports/: ``name=`` of ``--config`` if given, else the folder's name
+    (``demo`` without one)."""
     names = [entry.split("=", 1)[1] for entry in args.config if entry.startswith("name=")]
-    return names[-1] if names and names[-1] else Path(args.library).resolve().name
+    if names and names[-1]:
+        return names[-1]
+    return Path(args.library).resolve().name if args.library else "demo"
 
 
 def profile_folder(profile):
@@ -100,7 +110,7 @@ def argument_problem(args):
     """What is wrong with parsed ``args`` before anything runs, one line (str), or None."""
     if not (WORKFLOW / "Snakefile").is_file():
         return f"no workflow next to the package ({WORKFLOW}): install it with pip install -e"
-    if not Path(args.library).is_dir():
+    if args.library is not None and not Path(args.library).is_dir():
         return f"{args.library}: not a folder"
     if args.command == "repair" and args.cores < 1:
         return f"--cores {args.cores}: needs at least 1 core"
@@ -112,31 +122,58 @@ def argument_problem(args):
     return None
 
 
-def run(command, log_path):
-    """Run ``command``, its output into ``log_path`` (line by line), the lines :data:`SHOWN` onto stdout and the
-    posefix error lines once each onto stderr: the exit code and the error lines."""
-    errors = []
+def run(command, log_path, dry_run=False):
+    """Run ``command``, its output into ``log_path`` (line by line); onto stdout the progress
+    (:class:`~posefix.workflow.progress.RunProgress`; a dry run: Snakemake's table of the jobs) and the lines
+    :data:`SHOWN`, the posefix error lines once each onto stderr: the exit code and the error lines."""
+    errors, progress = [], RunProgress()
     log_path.parent.mkdir(parents=True, exist_ok=True)
     with open(log_path, "w", encoding="utf-8", buffering=1) as log, subprocess.Popen(
             command, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, errors="replace",
             start_new_session=True) as child:
+        lines = queue.Queue()
+        threading.Thread(target=_pump, args=(child.stdout, lines), daemon=True).start()
         try:
             table = False  # Snakemake's table of the jobs to run, from "Job stats:" to its "total" line
-            for line in child.stdout:
+            for line in iter(lambda: _next_line(lines, progress), None):
                 log.write(line)
-                table = table or line.startswith("Job stats:")
+                table = dry_run and (table or line.startswith("Job stats:"))
                 error = line.startswith("posefix") and "error:" in line
                 if error and line not in errors:  # once, to stderr
                     errors.append(line)
                     print(line, end="", file=sys.stderr, flush=True)
                 elif not error and (table or SHOWN.match(line)):
                     print(line, end="", flush=True)
+                elif not dry_run:
+                    _show(progress.feed(line))
                 table = table and not line.startswith("total")
             return child.wait(), errors
         except KeyboardInterrupt:  # Ctrl-C: stop Snakemake and its jobs, quietly
             child.send_signal(signal.SIGINT)
             child.wait()
             return 130, errors
+
+
+def _pump(stream, lines):
+    """Put the lines of ``stream`` into the queue ``lines``, then None."""
+    for line in stream:
+        lines.put(line)
+    lines.put(None)
+
+
+def _next_line(lines, progress):
+    """The next line of Snakemake's output from the queue ``lines`` (None at its end); while none comes, what
+    ``progress`` says of the jobs running."""
+    while True:
+        try:
+            return lines.get(timeout=5.0)
+        except queue.Empty:
+            _show(progress.idle())
+
+
+def _show(lines):
+    for line in lines:
+        print(line, flush=True)
 
 
 def failure_line(log_text, folder):
@@ -172,13 +209,37 @@ def recap_line(line):
     return f"posefix: failed in {match.group(1)}: {match.group(2)}" if match else line
 
 
+def finished_lines(reports, results, most=10):
+    """What a finished repair made and where (list of str): each pose's status and intersecting faces (``most``
+    poses at most, the first that are not ok first), the repaired meshes, the summary page and the 3D viewer."""
+    try:
+        entries = json.loads((reports / "summary.json").read_text())["poses"]
+    except (OSError, ValueError, KeyError):
+        return []
+    statuses = [pose_status(entry) for entry in entries]
+    kinds = [kind for kind, _ in statuses]
+    counts = ", ".join(f"{kinds.count(kind)} {kind}" for kind in ("ok", "fallback", "check"))
+    lines = [f"posefix: {len(entries)} poses repaired: {counts}"]
+    for i in sorted(range(len(entries)), key=lambda i: kinds[i] == "ok")[:most]:
+        faces, (kind, reason) = entries[i]["intersecting_faces"], statuses[i]
+        lines.append(f"  {entries[i]['pose']}: {kind}{f' ({reason})' if reason else ''}; intersecting faces: "
+                     f"{faces['target']} in the target, {faces['repaired']} repaired ({faces['repaired_new']} new)")
+    if len(entries) > most:
+        lines.append(f"  ... and {len(entries) - most} more (the summary page)")
+    pages = [("repaired meshes", results / "repaired"), ("summary page", reports / "summary.html"),
+             ("3D viewer", reports / "viewer.html")]
+    return lines + [f"posefix: {what}: {path}" for what, path in pages if path.exists()]
+
+
 def main(argv=None):
     args = build_parser().parse_args(argv)
     problem = argument_problem(args)
     if problem:
         sys.exit(f"posefix: error: {problem}")
     log_path = Path("posefix-logs") / time.strftime(f"{args.command}-%Y%m%d-%H%M%S.log")
-    code, errors = run(snakemake_command(args), log_path)
+    code, errors = run(snakemake_command(args), log_path, dry_run=args.command == "repair" and args.dry_run)
+    if code == 0 and args.command == "repair" and not args.dry_run:
+        print("\n".join(finished_lines(Path("reports") / library_name(args), Path("results") / library_name(args))))
     if code == 130:
         print("posefix: interrupted; run the same command again to go on", file=sys.stderr)
     elif code != 0:
