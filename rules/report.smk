@@ -97,6 +97,37 @@ rule overview:
         " --log {log:q}"
 
 
+rule viewer:
+    input:
+        summary=rules.summary.output.json,
+        keyframes=expand(f"{RESULTS}/{{pose}}/keyframes.h5", pose=POSES),
+        classify=expand(f"{RESULTS}/{{pose}}/classify.h5", pose=POSES),
+        verify=expand(f"{RESULTS}/{{pose}}/verify.h5", pose=POSES),
+        baselines=[path for p in POSES for path in baseline_artifacts(p).values()],
+        page=VIEWER_PAGE,  # the page's template, script and three.js: a changed page rebuilds it
+    output:
+        report(
+            f"{REPORTS}/viewer.html",
+            caption="captions/viewer.rst",
+            category="1. Library",
+            labels={"figure": "3D viewer"},
+        ),
+    params:
+        results=lambda wildcards, input: os.path.dirname(os.path.dirname(input.verify[0])),
+        script=stage_script("viewer"),
+        code=stage_code("viewer"),
+    threads: 1
+    resources:
+        mem_mb=memory_mb("viewer"),
+    log:
+        f"{RESULTS}/logs/viewer.log",
+    conda:
+        "../envs/posefix.yaml"
+    shell:
+        "python {params.script:q} --summary {input.summary:q} --results {params.results:q} --out {output:q}"
+        " --log {log:q}"
+
+
 onerror:  # the summary of the poses that finished, then the failed jobs' posefix error lines (plain snakemake too)
     _text = "".join(Path(p).read_text(errors="replace") for p in (log if isinstance(log, list) else [log]) if p)
     _errors = failed_job_errors(_text, Path.cwd())
