@@ -77,8 +77,7 @@ def main(args, log):
         raise InputError(args.summary, "lists no pose")
     baselines, reference, poses = baseline_names(entries), None, []
     for entry in entries:
-        with timings.step("read"):
-            target, repairs, kf, cl, ve, attrs = read_pose(Path(args.results) / entry["pose"], baselines, reference)
+        target, repairs, kf, cl, ve, attrs = read_pose(Path(args.results) / entry["pose"], baselines, reference)
         reference = (kf["reference"], kf["faces"], kf["reference_hit"], float(attrs["metrics"]["bbox_diagonal"]))
         hit = kf["reference_hit"]
         meshes = [mesh_record("target", *target, hit, ("reference", reference[0]))]
@@ -87,9 +86,10 @@ def main(args, log):
                                  ve["replaced"], ve["deviation"]))
         log.info("%s: %s", entry["pose"], ", ".join(f"{m['name']} {m['faces']} faces ({m['new']} new)" for m in meshes))
     V, F, hit, diagonal = reference
-    files = {key: (PAGE / path).read_text(encoding="utf-8") for key, path in VIEWER_FILES.items()}
-    page = viewer_html(page_data(library, (V, hit), F, poses, diagonal), files).encode()
-    atomic_write_bytes(args.out, page)
+    with timings.step("page"):
+        files = {key: (PAGE / path).read_text(encoding="utf-8") for key, path in VIEWER_FILES.items()}
+        page = viewer_html(page_data(library, (V, hit), F, poses, diagonal), files).encode()
+        atomic_write_bytes(args.out, page)
     log.info("wrote %s (%d poses, %.1f MB)", args.out, len(poses), len(page) / 1e6)
 
 
