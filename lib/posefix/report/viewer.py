@@ -130,12 +130,13 @@ def page_data(library, reference, F, poses, diagonal):
     """
     V, hit = reference
     R = camera(V)
+    center = (V.min(axis=0) + V.max(axis=0)) / 2
     colors = {"surface": SURFACE, "highlight": HIGHLIGHT, "secondary": SECONDARY, "constrained": CONSTRAINED,
               "free": FREE, "pass_through": FLAG_COLORS[REPLACED_PASS_THROUGH]}
     return {"library": library, "vertices": len(V), "face_count": len(F), "faces": encode_array(F.astype("<u4")),
             "reference": mesh_record("reference", V, hit, hit), "poses": poses, "diagonal": float(diagonal),
-            "view": {"center": ((V.min(axis=0) + V.max(axis=0)) / 2).tolist(), "up": R[1].tolist(),
-                     "toward": R[2].tolist()},
+            "view": {"center": center.tolist(), "up": R[1].tolist(), "toward": R[2].tolist(),
+                     "extent": np.abs((V - center) @ R[:2].T).max(axis=0).tolist()},
             "colors": {k: to_hex(c) for k, c in colors.items()}, "status_colors": STATUS_COLORS,
             "heat": {"map": HEAT_MAP, "colors": [to_hex(c) for c in colormaps[HEAT_MAP](np.linspace(0, 1, 256))]}}
 

@@ -126,10 +126,12 @@ const scenes = [0, 1].map(() => {
   return { scene, mesh };
 });
 
+const DISTANCE = DATA.diagonal * 1.5;  // of the camera from the reference's centre, before orbit and zoom
+
 function resetCamera() {
   const v = DATA.view, c = new THREE.Vector3(...v.center);
   camera.up.set(...v.up);
-  camera.position.copy(c).addScaledVector(new THREE.Vector3(...v.toward), DATA.diagonal * 1.4);
+  camera.position.copy(c).addScaledVector(new THREE.Vector3(...v.toward), DISTANCE);
   controls.target.copy(c);
   controls.update();
 }
@@ -154,7 +156,8 @@ function render() {
   const w = view.clientWidth, h = view.clientHeight, panes = state.left ? 2 : 1;
   renderer.setSize(w, h, false);
   camera.aspect = w / panes / h;
-  camera.zoom = 1 / panes;  // each pane shows the whole view
+  const [wx, wy] = DATA.view.extent, reach = DISTANCE * Math.tan(THREE.MathUtils.degToRad(camera.fov / 2)) / 1.1;
+  camera.zoom = Math.min(reach / wy, (reach * camera.aspect) / wx);  // each pane shows the whole reference
   camera.updateProjectionMatrix();
   renderer.setScissorTest(true);
   for (let i = 0; i < panes; i++) {
