@@ -39,6 +39,13 @@ def test_positions_decode_to_their_float32_values_with_or_without_a_base():
     assert len(encode_positions(X, V)) < len(encode_positions(X)) / 5  # the unchanged vertices cost next to nothing
 
 
+def test_a_60k_vertex_repair_that_moved_every_vertex_stays_under_3_mb():
+    rng = np.random.default_rng(1)
+    target = rng.normal(size=(60_000, 3))
+    record = encode_positions(target + rng.normal(scale=1e-3, size=target.shape), target)
+    assert len(record) < 3e6 and len(encode_array(np.packbits(rng.random(120_000) < 0.1))) < 3e4
+
+
 def test_the_encoding_is_deterministic():
     V, _ = icosphere(2)
     assert encode_positions(V * 1.1, V) == encode_positions(V * 1.1, V)
