@@ -1,4 +1,4 @@
-# Reports: the summary of a library, the figures per pose and the overview (posefix.report), S0
+# Reports: the summary of a library, the figures per pose, the overview and the 3D viewer (posefix.report), S0
 # compared with the baseline repairs of config baselines. Captions of the report() outputs are in
 # rules/captions/.
 

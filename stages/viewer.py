@@ -75,10 +75,12 @@ def main(args, log):
     library, entries = read_summary(args.summary)
     if not entries:
         raise InputError(args.summary, "lists no pose")
-    baselines, reference, poses = baseline_names(entries), None, []
+    baselines, reference, bounds, poses = baseline_names(entries), None, [], []
     for entry in entries:
         target, repairs, kf, cl, ve, attrs = read_pose(Path(args.results) / entry["pose"], baselines, reference)
         reference = (kf["reference"], kf["faces"], kf["reference_hit"], float(attrs["metrics"]["bbox_diagonal"]))
+        shown = np.vstack([kf["reference"], target[0], *(X for X, _ in repairs.values())])
+        bounds += [shown.min(axis=0), shown.max(axis=0)]
         hit = kf["reference_hit"]
         meshes = [mesh_record("target", *target, hit, ("reference", reference[0]))]
         meshes += [mesh_record(name, X, faces, hit, ("target", target[0])) for name, (X, faces) in repairs.items()]
@@ -88,7 +90,8 @@ def main(args, log):
     V, F, hit, diagonal = reference
     with timings.step("page"):
         files = {key: (PAGE / path).read_text(encoding="utf-8") for key, path in VIEWER_FILES.items()}
-        page = viewer_html(page_data(library, (V, hit), F, poses, diagonal), files).encode()
+        bounds = (np.min(bounds, axis=0), np.max(bounds, axis=0))  # of every mesh: the first view shows them all
+        page = viewer_html(page_data(library, (V, hit), F, poses, diagonal, bounds), files).encode()
         atomic_write_bytes(args.out, page)
     log.info("wrote %s (%d poses, %.1f MB)", args.out, len(poses), len(page) / 1e6)
 

@@ -348,7 +348,8 @@ def test_files_that_cannot_be_poses_are_left_out_alone_and_the_others_repaired(t
 
 def test_plain_snakemake_ends_a_failed_run_with_the_posefix_error_lines(tmp_path):
     """The README's plain `snakemake`: the posefix line of a bad pose comes again after Snakemake's job log, with
-    the good pose repaired (the default profile keeps going) and in the summary, the bad one listed apart."""
+    the good pose repaired (the default profile keeps going) and in the summary and the 3D viewer, the bad one
+    listed apart."""
     library = tmp_path / "lib"
     V, F = icosphere(2)
     write_mesh(library / "ball-reference.obj", V, F)
@@ -366,6 +367,7 @@ def test_plain_snakemake_ends_a_failed_run_with_the_posefix_error_lines(tmp_path
     assert [e["pose"] for e in summary["poses"]] == ["ball-01"]
     assert summary["failed"] == [{"pose": "ball-02", "error": line}]
     assert "ball-02</b>: posefix validate: error: " in (tmp_path / "reports" / "lib" / "summary.html").read_text()
+    assert '"name":"ball-01"' in (tmp_path / "reports" / "lib" / "viewer.html").read_text()  # the 3D viewer too
     assert "posefix: summary of the 1 poses that finished, 1 listed as failed: reports/lib/summary.html" in tail
 
 

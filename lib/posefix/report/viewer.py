@@ -113,7 +113,7 @@ def pose_record(name, status, meshes, mask, replaced, deviation):
             "regions": encode_array(regions.astype(np.uint8)), "heat_limit": heat_limit(deviation)}
 
 
-def page_data(library, reference, F, poses, diagonal):
+def page_data(library, reference, F, poses, diagonal, bounds):
     """Everything the page shows, JSON-ready dict.
 
     Parameters
@@ -127,16 +127,20 @@ def page_data(library, reference, F, poses, diagonal):
         :func:`pose_record` of each pose, in library order.
     diagonal : float
         The reference's bounding-box diagonal (length unit of the deviations).
+    bounds : (2, 3) float
+        Lowest and highest coordinates of every mesh of the page: the camera's first view shows them all, from
+        the side of the report's renders (:func:`posefix.report.rasterizer.camera`).
     """
     V, hit = reference
     R = camera(V)
-    center = (V.min(axis=0) + V.max(axis=0)) / 2
+    center = np.mean(bounds, axis=0)
+    corners = np.array([[bounds[i][0], bounds[j][1], bounds[k][2]] for i in (0, 1) for j in (0, 1) for k in (0, 1)])
     colors = {"surface": SURFACE, "highlight": HIGHLIGHT, "secondary": SECONDARY, "constrained": CONSTRAINED,
               "free": FREE, "pass_through": FLAG_COLORS[REPLACED_PASS_THROUGH]}
     return {"library": library, "vertices": len(V), "face_count": len(F), "faces": encode_array(F.astype("<u4")),
             "reference": mesh_record("reference", V, hit, hit), "poses": poses, "diagonal": float(diagonal),
             "view": {"center": center.tolist(), "up": R[1].tolist(), "toward": R[2].tolist(),
-                     "extent": np.abs((V - center) @ R[:2].T).max(axis=0).tolist()},
+                     "extent": np.abs((corners - center) @ R[:2].T).max(axis=0).tolist()},
             "colors": {k: to_hex(c) for k, c in colors.items()}, "status_colors": STATUS_COLORS,
             "heat": {"map": HEAT_MAP, "colors": [to_hex(c) for c in colormaps[HEAT_MAP](np.linspace(0, 1, 256))]}}
 

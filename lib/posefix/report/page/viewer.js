@@ -115,15 +115,16 @@ headlight.position.set(0.4, 0.6, 0.8);
 headlight.target.position.set(0, 0, -1);
 camera.add(headlight, headlight.target);
 const controls = new OrbitControls(camera, renderer.domElement);
-const scenes = [0, 1].map(() => {
+const scenes = [0, 1].map(() => {  // per pane: the mesh, and its intersecting faces again on top ("x-ray")
   const scene = new THREE.Scene();
   scene.add(new THREE.AmbientLight(0xffffff, 0.9));
-  const geometry = new THREE.BufferGeometry();
-  const material = new THREE.MeshLambertMaterial({ vertexColors: true, flatShading: true, side: THREE.DoubleSide });
-  const mesh = new THREE.Mesh(geometry, material);
-  mesh.frustumCulled = false;
-  scene.add(mesh);
-  return { scene, mesh };
+  const mesh = new THREE.Mesh(new THREE.BufferGeometry(), new THREE.MeshLambertMaterial(
+    { vertexColors: true, flatShading: true, side: THREE.DoubleSide }));
+  const xray = new THREE.Mesh(new THREE.BufferGeometry(), new THREE.MeshLambertMaterial(
+    { vertexColors: true, flatShading: true, side: THREE.DoubleSide, transparent: true, opacity: 0.5,
+      depthTest: false }));
+  for (const m of [mesh, xray]) { m.frustumCulled = false; scene.add(m); }
+  return { scene, mesh, xray };
 });
 
 const DISTANCE = DATA.diagonal * 1.5;  // of the camera from the reference's centre, before orbit and zoom
@@ -145,10 +146,14 @@ function fill(slot, mesh, colors) {  // non-indexed geometry: corner k of face f
       K[o] = colors[3 * f]; K[o + 1] = colors[3 * f + 1]; K[o + 2] = colors[3 * f + 2];
     }
   }
-  const geometry = scenes[slot].mesh.geometry;
+  const geometry = scenes[slot].mesh.geometry, xray = scenes[slot].xray.geometry;
   geometry.setAttribute("position", new THREE.BufferAttribute(P, 3));
   geometry.setAttribute("color", new THREE.BufferAttribute(K, 3));
   geometry.computeVertexNormals();
+  const shown = [];  // the corners of the faces drawn again on top: the intersecting ones, in the faces mode
+  for (let f = 0; f < m && state.mode === "faces"; f++) if (mesh.hit[f]) shown.push(3 * f, 3 * f + 1, 3 * f + 2);
+  for (const name of ["position", "color", "normal"]) xray.setAttribute(name, geometry.getAttribute(name));
+  xray.setIndex(shown);
   return P;
 }
 
@@ -156,7 +161,7 @@ function render() {
   const w = view.clientWidth, h = view.clientHeight, panes = state.left ? 2 : 1;
   renderer.setSize(w, h, false);
   camera.aspect = w / panes / h;
-  const [wx, wy] = DATA.view.extent, reach = DISTANCE * Math.tan(THREE.MathUtils.degToRad(camera.fov / 2)) / 1.1;
+  const [wx, wy] = DATA.view.extent, reach = DISTANCE * Math.tan(THREE.MathUtils.degToRad(camera.fov / 2));
   camera.zoom = Math.min(reach / wy, (reach * camera.aspect) / wx);  // each pane shows the whole reference
   camera.updateProjectionMatrix();
   renderer.setScissorTest(true);
