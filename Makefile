@@ -50,9 +50,10 @@ system:
 	  echo "posefix: installing $(SYSTEM_PACKAGES)"; \
 	  (apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends \
 	    $(SYSTEM_PACKAGES) >/dev/null) \
-	    || echo "posefix: WARNING: could not install $(SYSTEM_PACKAGES); OpenCL stages fall back to numpy"; \
+	    || echo "posefix: WARNING: could not install $(SYSTEM_PACKAGES); OpenCL stages fall back to numpy," \
+	      "the viewer's browser tests are skipped"; \
 	else echo "posefix: WARNING: not root or no apt-get: $(SYSTEM_PACKAGES) not installed;" \
-	  "OpenCL stages fall back to numpy, the contact solver to SuperLU"; fi
+	  "OpenCL stages fall back to numpy, the contact solver to SuperLU, the viewer's browser tests are skipped"; fi
 
 clean:
 	rm -rf results data/demo .snakemake
