@@ -113,7 +113,8 @@ def browse(page, state, *action, tmp):
     """Open ``page`` at ``#state`` in headless Chromium with ``action`` (--dump-dom, --screenshot=PNG); fails on
     any console message. Returns stdout."""
     proc = subprocess.run([CHROMIUM, "--headless=new", "--no-sandbox", "--use-angle=swiftshader",
-                           "--enable-unsafe-swiftshader", "--window-size=900,600", "--virtual-time-budget=20000",
+                           "--enable-unsafe-swiftshader", "--disable-dev-shm-usage", "--window-size=900,600",
+                           "--virtual-time-budget=20000",
                            "--enable-logging=stderr", "--v=0", f"--user-data-dir={tmp / 'profile'}", *action,
                            f"{page.as_uri()}#{state}"], capture_output=True, text=True, timeout=180)
     assert proc.returncode == 0, proc.stderr[-2000:]
