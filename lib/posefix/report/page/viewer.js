@@ -280,7 +280,7 @@ function dumpMesh(mesh, P) {  // the decoded positions and the corners drawn (fl
 let showing = Promise.resolve();
 
 function show(change) {  // apply a change of state, redraw; one at a time
-  showing = showing.then(() => update(change));
+  showing = showing.then(() => update(change), () => update(change));  // a failed change does not stop the next
   return showing;
 }
 
@@ -303,7 +303,10 @@ async function update(change) {
   legend(pose);
   labels(pose);
   document.getElementById("info").textContent = `${pose.name}: ${pose.status}` + (pose.reason ? ` (${pose.reason})` : "");
-  for (const li of document.getElementById("poses").children) li.classList.toggle("current", +li.dataset.index === state.pose);
+  for (const li of document.getElementById("poses").children) {
+    li.classList.toggle("current", +li.dataset.index === state.pose);
+    if (+li.dataset.index === state.pose) li.scrollIntoView({ block: "nearest" });
+  }
   const hash = new URLSearchParams({ pose: pose.name, mesh: state.mesh, mode: state.mode });
   if (state.left) hash.set("left", state.left);
   if (state.dump) hash.set("dump", state.dump);
