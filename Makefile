@@ -38,8 +38,10 @@ $(VENV)/.installed: pyproject.toml | system
 
 # Debian's PoCL gives an OpenCL CPU device (PyPI's PoCL cannot compile kernels on these CPUs); SuiteSparse's headers
 # build CHOLMOD; OpenBLAS (threaded) makes its supernodal factorization 3x faster than the reference BLAS.
-# Installed only when root with apt; otherwise the OpenCL stages fall back to numpy and the contact solver to SuperLU.
-SYSTEM_PACKAGES := pocl-opencl-icd libsuitesparse-dev libopenblas0-pthread
+# Chromium (headless, software WebGL) runs the tests of the 3D viewer page (tests/report/test_viewer.py).
+# Installed only when root with apt; otherwise the OpenCL stages fall back to numpy, the contact solver to SuperLU
+# and the viewer's browser tests are skipped.
+SYSTEM_PACKAGES := pocl-opencl-icd libsuitesparse-dev libopenblas0-pthread chromium
 system:
 	@if dpkg-query -W -f='$${Status}\n' $(SYSTEM_PACKAGES) 2>/dev/null | grep -c 'install ok installed' \
 	    | grep -qx "$(words $(SYSTEM_PACKAGES))"; then :; \
@@ -47,9 +49,10 @@ system:
 	  echo "posefix: installing $(SYSTEM_PACKAGES)"; \
 	  (apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends \
 	    $(SYSTEM_PACKAGES) >/dev/null) \
-	    || echo "posefix: WARNING: could not install $(SYSTEM_PACKAGES); OpenCL stages fall back to numpy"; \
+	    || echo "posefix: WARNING: could not install $(SYSTEM_PACKAGES); OpenCL stages fall back to numpy," \
+	      "the viewer's browser tests are skipped"; \
 	else echo "posefix: WARNING: not root or no apt-get: $(SYSTEM_PACKAGES) not installed;" \
-	  "OpenCL stages fall back to numpy, the contact solver to SuperLU"; fi
+	  "OpenCL stages fall back to numpy, the contact solver to SuperLU, the viewer's browser tests are skipped"; fi
 
 clean:
 	rm -rf results data/demo .snakemake

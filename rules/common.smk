@@ -22,7 +22,7 @@ from posefix.workflow.locks import clear_stale_locks
 from posefix.workflow.memory import memory_problem, stage_memory_mb
 from posefix.workflow.resources import available_memory
 from posefix.io.meshes import mesh_file
-from posefix.report.contents import POSE_FIGURES, TIMED_STAGES
+from posefix.report.contents import POSE_FIGURES, TIMED_STAGES, VIEWER_FILES
 
 
 SCHEMA = yaml.safe_load((Path(workflow.basedir) / "schemas" / "config.schema.yaml").read_text())
@@ -41,6 +41,10 @@ if workflow.is_main_process:  # not in the jobs a cluster executor starts: they 
 # The rules call `python`: a conda environment's under --sdm conda (envs/posefix.yaml), else the interpreter that
 # runs Snakemake (the venv's under `make run` and `posefix repair`), first on the PATH of every job.
 put_interpreter_first_on_path()
+
+
+VIEWER_PAGE = [str(Path(workflow.basedir) / "lib" / "posefix" / "report" / f) for f in VIEWER_FILES.values()]
+"""The files of the 3D viewer page (template, script, vendored three.js), inputs of rule viewer."""
 
 
 def stage_script(name):
@@ -241,7 +245,8 @@ SUMMARY_POSES = _summary_poses()
 
 
 def get_final_output():
-    """The targets of the workflow: every repaired pose, the report figures, the summary and the overview."""
+    """The targets of the workflow: every repaired pose, the report figures, the summary, the overview and the 3D
+    viewer."""
     return [
         *[repaired_file(p) for p in POSES],
         *[baseline_repaired_file(b, p) for b in BASELINES for p in POSES],
@@ -249,12 +254,13 @@ def get_final_output():
         *expand(f"{REPORTS}/figures/{{pose}}/downstream.png", pose=POSES),
         f"{REPORTS}/summary.json",
         f"{REPORTS}/overview.png",
+        f"{REPORTS}/viewer.html",
     ]
 
 
 def partial_summary(errors):
-    """After a failed run: the summary and overview of the poses that finished, the others listed with their error
-    line (``errors``: the posefix error lines of the failed jobs); nothing when no pose finished."""
+    """After a failed run: the summary, overview and 3D viewer of the poses that finished, the others listed with
+    their error line (``errors``: the posefix error lines of the failed jobs); nothing when no pose finished."""
     finished, unfinished = finished_poses({p: summary_inputs(p) for p in SUMMARY_POSES})
     if not finished or not unfinished:
         return
@@ -266,8 +272,10 @@ def partial_summary(errors):
     overview = [sys.executable, stage_script("overview"), "--summary", f"{REPORTS}/summary.json",
                 "--png", f"{REPORTS}/overview.png", "--html", f"{REPORTS}/summary.html",
                 "--log", f"{RESULTS}/logs/partial-overview.log"]
+    viewer = [sys.executable, stage_script("viewer"), "--summary", f"{REPORTS}/summary.json", "--results", RESULTS,
+              "--out", f"{REPORTS}/viewer.html", "--log", f"{RESULTS}/logs/partial-viewer.log"]
     quiet = {"stdout": subprocess.DEVNULL, "stderr": subprocess.DEVNULL}  # the stages' own logs keep their lines
-    if subprocess.run(summary, **quiet).returncode == 0 and subprocess.run(overview, **quiet).returncode == 0:
+    if all(subprocess.run(stage, **quiet).returncode == 0 for stage in (summary, overview, viewer)):
         print(f"posefix: summary of the {len(finished)} poses that finished, {len(unfinished)} listed as failed: "
               f"{REPORTS}/summary.html", file=sys.stderr)
 

@@ -1,4 +1,4 @@
-# Reports: the summary of a library, the figures per pose and the overview (posefix.report), S0
+# Reports: the summary of a library, the figures per pose, the overview and the 3D viewer (posefix.report), S0
 # compared with the baseline repairs of config baselines. Captions of the report() outputs are in
 # rules/captions/.
 
@@ -94,6 +94,37 @@ rule overview:
         "../envs/posefix.yaml"
     shell:
         "python {params.script:q} --summary {input:q} --png {output.png:q} --html {output.html:q}"
+        " --log {log:q}"
+
+
+rule viewer:
+    input:
+        summary=rules.summary.output.json,
+        keyframes=expand(f"{RESULTS}/{{pose}}/keyframes.h5", pose=POSES),
+        classify=expand(f"{RESULTS}/{{pose}}/classify.h5", pose=POSES),
+        verify=expand(f"{RESULTS}/{{pose}}/verify.h5", pose=POSES),
+        baselines=[path for p in POSES for path in baseline_artifacts(p).values()],
+        page=VIEWER_PAGE,  # the page's template, script and three.js: a changed page rebuilds it
+    output:
+        report(
+            f"{REPORTS}/viewer.html",
+            caption="captions/viewer.rst",
+            category="1. Library",
+            labels={"figure": "3D viewer"},
+        ),
+    params:
+        results=lambda wildcards, input: os.path.dirname(os.path.dirname(input.verify[0])),
+        script=stage_script("viewer"),
+        code=stage_code("viewer"),
+    threads: 1
+    resources:
+        mem_mb=memory_mb("viewer"),
+    log:
+        f"{RESULTS}/logs/viewer.log",
+    conda:
+        "../envs/posefix.yaml"
+    shell:
+        "python {params.script:q} --summary {input.summary:q} --results {params.results:q} --out {output:q}"
         " --log {log:q}"
 
 

@@ -138,8 +138,8 @@ def test_baselines_reach_the_report_and_the_check(tmp_path):
 
 
 def test_report_has_every_section_and_non_blank_figures(demo_run):
-    """`snakemake --report` after a run: one self-contained HTML file with the library page and, for
-    every pose, its six figures (captioned PNGs that decode and are not blank)."""
+    """`snakemake --report` after a run: one self-contained HTML file with the library page (overview, summary
+    table, 3D viewer) and, for every pose, its six figures (captioned PNGs that decode and are not blank)."""
     import base64
     import io
     from html.parser import HTMLParser
@@ -173,7 +173,7 @@ def test_report_has_every_section_and_non_blank_figures(demo_run):
     for pose in POSES:
         assert sorted(f.rsplit("/", 1)[1] for f in poses[pose.name]) == [f"{f}.png" for f in figures]
     library = [f for files in data["categories"]["1. Library"].values() for f in files]
-    assert sorted(f.rsplit("/", 1)[1] for f in library) == ["overview.png", "summary.html"]
+    assert sorted(f.rsplit("/", 1)[1] for f in library) == ["overview.png", "summary.html", "viewer.html"]
     pngs = 0
     for path, item in data["results"].items():
         assert item["caption"].strip(), path
@@ -182,6 +182,8 @@ def test_report_has_every_section_and_non_blank_figures(demo_run):
             pixels = imread(io.BytesIO(payload))
             assert pixels.ndim == 3 and pixels[..., :3].var() > 0, path
             pngs += 1
+        elif path.endswith("viewer.html"):
+            assert all(f'"name":"{p.name}"' in payload.decode() for p in POSES)
         else:
             table = payload.decode()
             assert all(f"<td>{p.name}</td>" in table for p in POSES)
@@ -346,7 +348,8 @@ def test_files_that_cannot_be_poses_are_left_out_alone_and_the_others_repaired(t
 
 def test_plain_snakemake_ends_a_failed_run_with_the_posefix_error_lines(tmp_path):
     """The README's plain `snakemake`: the posefix line of a bad pose comes again after Snakemake's job log, with
-    the good pose repaired (the default profile keeps going) and in the summary, the bad one listed apart."""
+    the good pose repaired (the default profile keeps going) and in the summary and the 3D viewer, the bad one
+    listed apart."""
     library = tmp_path / "lib"
     V, F = icosphere(2)
     write_mesh(library / "ball-reference.obj", V, F)
@@ -364,6 +367,7 @@ def test_plain_snakemake_ends_a_failed_run_with_the_posefix_error_lines(tmp_path
     assert [e["pose"] for e in summary["poses"]] == ["ball-01"]
     assert summary["failed"] == [{"pose": "ball-02", "error": line}]
     assert "ball-02</b>: posefix validate: error: " in (tmp_path / "reports" / "lib" / "summary.html").read_text()
+    assert '"name":"ball-01"' in (tmp_path / "reports" / "lib" / "viewer.html").read_text()  # the 3D viewer too
     assert "posefix: summary of the 1 poses that finished, 1 listed as failed: reports/lib/summary.html" in tail
 
 

@@ -29,6 +29,7 @@ def test_pose_status_flags_what_needs_a_look():
     assert kind == "check" and reason == "38 faces stretched or crushed beyond 4x"
     page = summary_html("lib <x>", [_entry("a"), _entry("c", new=6, inside=4)])
     assert page.count("<tr style=") == 2 and "lib &lt;x&gt;" in page and "1 ok, 0 fallback, 1 check" in page
+    assert "<a href='viewer.html'>3D viewer</a>" in page
     assert pixels(figures.library_overview([_entry("a"), _entry("c", new=6, inside=4)])).var() > 0
 
 

@@ -16,3 +16,9 @@ POSE_FIGURES = {
 
 TIMED_STAGES = ("keyframes", "classify", "constraints", "fit", "integrate", "verify")
 """Stages whose wall seconds (Snakemake benchmark files) the ``timings`` figure shows."""
+
+VIEWER_FILES = {"template": "page/viewer.html", "script": "page/viewer.js",
+                "three": "vendor/three/three.module.min.js", "controls": "vendor/three/OrbitControls.js"}
+"""Files of the 3D viewer page (``viewer.html``), relative to this package's folder: its template and script, and
+three.js vendored for it (``vendor/three/README.md``). Stage ``viewer`` inlines them; the workflow lists them as
+the rule's inputs, so that a changed page rebuilds it."""

@@ -27,6 +27,18 @@ DEVIATION_MARKERS = (("constrained_max", "o", "V_C max"), ("constrained_mean", "
 """Deviation summaries in the library overview: key, marker, label."""
 BASELINE_COLORS = ("tab:cyan", "tab:olive", "tab:brown")
 """Colour of each baseline repair (in ``summary.json``'s order) in the library overview."""
+CONSTRAINED = (0.25, 0.45, 0.85)
+"""Colour of the faces of ``V_C`` (all three corners constrained) in the classification figure and the viewer."""
+FREE = (0.85, 0.85, 0.85)
+"""Colour of the other faces (free: integrated through the field) there."""
+HEAT_MAP = "magma_r"
+"""Colour map of the deviation heat map (figure and viewer)."""
+
+
+def heat_limit(deviation):
+    """Top of the deviation heat map's colour scale: the 99.5th percentile of ``deviation`` (n,), or its max when
+    that is 0, float (the figure and the viewer colour a pose on the same scale)."""
+    return float(np.percentile(deviation, 99.5)) or float(deviation.max())
 
 
 def panel_height(limits, width=4.6, extra=1.8):
@@ -95,11 +107,10 @@ def deviation_map(X, F, R, deviation, replaced, title=""):
     """
     fig = Figure(figsize=(10, panel_height(view_limits(X, R=R))), dpi=DPI)
     ax = fig.add_subplot(1, 2, 1)
-    vmax = float(np.percentile(deviation, 99.5)) or float(deviation.max())
-    colors, norm = heat_colors(face_values(deviation, F), colormaps["magma_r"], vmax)
+    colors, norm = heat_colors(face_values(deviation, F), colormaps[HEAT_MAP], heat_limit(deviation))
     draw_mesh(ax, X, F, R, colors=colors)
     ax.set_title(f"deviation from the target (max {deviation.max():.2g} d)", fontsize=10)
-    bar = fig.colorbar(ScalarMappable(norm=norm, cmap=colormaps["magma_r"]), ax=ax, shrink=0.8, extend="max")
+    bar = fig.colorbar(ScalarMappable(norm=norm, cmap=colormaps[HEAT_MAP]), ax=ax, shrink=0.8, extend="max")
     bar.set_label("|repaired - target| / bbox diagonal")
     ax = fig.add_subplot(1, 2, 2)
     colors = np.tile([0.78, 0.78, 0.80], (len(F), 1))
@@ -140,11 +151,11 @@ def classification(V_ref, F, R, mask, frame_counts, repaired, repaired_new, titl
     ax.set_ylabel("intersecting faces")
     ax.legend(fontsize=8)
     ax = fig.add_subplot(1, 2, 2)
-    colors = np.where(mask[F].all(axis=1)[:, None], [[0.25, 0.45, 0.85]], [[0.85, 0.85, 0.85]])
+    colors = np.where(mask[F].all(axis=1)[:, None], [CONSTRAINED], [FREE])
     draw_mesh(ax, V_ref, F, R, colors=colors)
     ax.set_title(f"V_C on the reference: {mask.sum()} of {len(mask)} vertices", fontsize=10)
-    ax.legend(handles=[Patch(color=(0.25, 0.45, 0.85), label="V_C (constrained)"),
-                       Patch(color=(0.85, 0.85, 0.85), label="free (integrated through the field)")],
+    ax.legend(handles=[Patch(color=CONSTRAINED, label="V_C (constrained)"),
+                       Patch(color=FREE, label="free (integrated through the field)")],
               loc="upper center", fontsize=8, frameon=False, bbox_to_anchor=(0.5, 0.0), ncol=2)
     fig.suptitle(title, fontsize=11)
     return fig

@@ -255,6 +255,8 @@ def summary_html(library, entries, bar=DEVIATION_BAR, failed=()):
             "<style>body{font-family:sans-serif;font-size:13px}table{border-collapse:collapse}"
             "td,th{border:1px solid #999;padding:3px 6px;text-align:right}th{background:#eee}</style></head><body>"
             f"<h2>posefix summary: {html.escape(library)}</h2>{_failed_html(failed)}"
+            "<p><a href='viewer.html'>3D viewer</a> (viewer.html beside this page): every pose's target, repairs and "
+            "reference, intersecting faces, deviation heat map.</p>"
             f"<p>{len(entries)} poses: {tally}. ok: clean and within the deviation bar; fallback: clean, with "
             f"regions copied from the target or untangled; check: new intersecting faces outside the pass-through "
             f"fallback, a V_C max deviation above {bar:g} of the bbox diagonal, or faces stretched or crushed beyond "

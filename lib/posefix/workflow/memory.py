@@ -10,6 +10,7 @@ PEAK_MB = {
     "constraints": (100, 3.5), "integrate": (188, 0.3), "verify": (63, 21.6), "export": (109, 2.0),
     "downstream": (310, 24.6), "skeleton": (133, 6.0), "repair_medial": (112, 6.3), "tet_mesh": (175, 0.8),
     "repair_volumetric": (202, 22.3), "repair_contact": (64, 21.5), "export_baseline": (115, 1.9), "render": (141, 7.7),
+    "viewer": (115, 1.7),
 }
 """Peak memory of each stage (Snakemake's max_rss) as MB at rest plus MB per 1000 reference vertices: the line
 through lion-01 (5.0k vertices) and kids-0001's 0001.isometry.1 (59.7k) with every repair, ``snakemake --cores 2``
@@ -17,8 +18,10 @@ through lion-01 (5.0k vertices) and kids-0001's 0001.isometry.1 (59.7k) with eve
 margin (at most 18 % above the line: keyframes) in the stages it ran, verify's 4.1 GB included. The skeleton's and
 the volumetric repair's lines are the latest run's (f2b5d3f: up to 37 % above the run before); the downstream
 check's is the line through its three sizes with its Cholesky on CHOLMOD (6429b20: 431, 1689 and 6089 MB); the
-others that run's (the latest peaks at most 6 % above them). The fit's rule asks for its kernel cache's budget instead (config
-fit.memory_gb: the cache shrinks to what the job gets)."""
+others that run's (the latest peaks at most 6 % above them). The 3D viewer's is the line through lion (123 MB: 9
+poses with every repair, read one at a time) and a synthetic 92k-vertex pose with three baselines (265 MB). The
+fit's rule asks for its kernel cache's budget instead (config fit.memory_gb: the cache shrinks to what the job
+gets)."""
 OTHER_MB = (300, 10)
 """The same for a stage not in PEAK_MB (the summary's, the authoring stages)."""
 MARGIN = 1.25
