@@ -2,8 +2,8 @@
 
 Runs the example-driven discrete-shell deformation (Fröhlich & Botsch 2011; Gauss–Newton, see
 ``posefix.downstream``) from the reference towards the original target and towards the repaired pose,
-for every stiffness k_b in ``--k-bend`` and weight alpha in ``--alphas`` (a grid: single settings
-are fragile). The same three far-apart handle vertices are pinned at their linear blend in every
+for every stiffness k_b in ``--k-bend`` and weight alpha in ``--alphas`` (one setting by default;
+``make bench`` runs the grid ``posefix.downstream.check.GRID``, as single settings are fragile). The same three far-apart handle vertices are pinned at their linear blend in every
 run; every ``--baseline`` repair is a further example, checked over the same grid. Writes per-run
 iterations, convergence, stop reason and the error after every iteration, and (``--png``) a figure
 of the energy per iteration (``posefix.report.figures.downstream_history``). With ``--threads`` N, N
