@@ -75,7 +75,7 @@ def test_adding_a_pose_plans_only_that_pose_and_a_code_change_only_what_it_chang
     jobs = planned(checkout, tmp_path, *config)
     per_pose = {"validate", "keyframes", "classify", "constraints", "fit", "integrate", "verify", "export",
                 "downstream", "render", "repair_medial", "repair_volumetric", "repair_contact"}
-    assert set(jobs) == per_pose | {"export_baseline", "summary", "overview", "all"}
+    assert set(jobs) == per_pose | {"export_baseline", "summary", "overview", "viewer", "all"}
     assert all(jobs[rule] == 1 for rule in per_pose) and jobs["export_baseline"] == 3
     proc = run(checkout, tmp_path, *config)
     assert proc.returncode == 0, proc.stderr[-3000:]
@@ -83,7 +83,7 @@ def test_adding_a_pose_plans_only_that_pose_and_a_code_change_only_what_it_chang
     module = checkout / "lib" / "posefix" / "verify" / "sequence.py"
     module.write_text(module.read_text() + "\n# a comment\n")
     jobs = planned(checkout, tmp_path, *config)
-    assert set(jobs) == {"verify", "export", "downstream", "render", "summary", "overview", "all"}
+    assert set(jobs) == {"verify", "export", "downstream", "render", "summary", "overview", "viewer", "all"}
     assert jobs["verify"] == 4
 
 

@@ -76,9 +76,10 @@ def test_posefix_repair_from_another_folder_matches_the_workflow_run(demo_run, t
     lines = proc.stdout.splitlines()
     assert lines[0].startswith("posefix: ") and lines[0].endswith(" jobs to run") and len(lines) < 20, lines
     assert any(line.endswith(" jobs done (100%)") for line in lines), lines
-    assert lines[-4].startswith("posefix: 1 poses repaired: ") and lines[-3].startswith("  demo-01: "), lines
-    assert lines[-2:] == ["posefix: repaired meshes: results/demo/repaired",
-                          "posefix: summary page: reports/demo/summary.html"], lines
+    assert lines[-5].startswith("posefix: 1 poses repaired: ") and lines[-4].startswith("  demo-01: "), lines
+    assert lines[-3:] == ["posefix: repaired meshes: results/demo/repaired",
+                          "posefix: summary page: reports/demo/summary.html",
+                          "posefix: 3D viewer: reports/demo/viewer.html"], lines
     name = "results/demo/repaired/demo-01.obj"
     assert (tmp_path / name).read_bytes() == (demo_run / name).read_bytes()
     assert list((tmp_path / "posefix-logs").glob("repair-*.log"))
