@@ -17,7 +17,8 @@ from posefix.workflow.config_check import config_problems, typed_by_schema
 from posefix.io.errors import InputError
 from posefix.workflow.fingerprint import CodeFingerprints
 from posefix.io.artifacts import read_artifact
-from posefix.io.library import Library, discover_library, read_reference
+from posefix.io.containers import container_format, container_stem
+from posefix.io.library import Library, container_library, discover_library, read_reference
 from posefix.workflow.locks import clear_stale_locks
 from posefix.workflow.memory import memory_problem, stage_memory_mb
 from posefix.workflow.resources import available_memory
@@ -98,7 +99,12 @@ def _library(wanted):
     try:
         if config["library"] is None:
             return _demo_library(wanted)
-        return discover_library(config["library"], reference=config["reference"], poses=wanted, name=config["name"])
+        reference = None if config["reference"] is None else str(config["reference"])  # a frame: 12
+        if container_format(config["library"]):  # one USD or glTF file: its poses unpacked under results/
+            name = config["name"] or container_stem(config["library"])
+            return container_library(config["library"], f"{config['results']}/{name}/poses", reference=reference,
+                                     poses=wanted, name=name, mesh=config["mesh"])
+        return discover_library(config["library"], reference=reference, poses=wanted, name=config["name"])
     except InputError as exc:
         sys.exit(f"posefix: error: {exc}")
 
@@ -244,12 +250,22 @@ def _summary_poses():
 SUMMARY_POSES = _summary_poses()
 
 
+def repaired_containers():
+    """For a USD or glTF library: the container of each repair, results/<library>/repaired[-<baseline>]/<file name>
+    (rule pack); else none."""
+    if not LIBRARY.container:
+        return []
+    name = os.path.basename(LIBRARY.container)
+    return [f"{RESULTS}/repaired/{name}", *[f"{RESULTS}/repaired-{b}/{name}" for b in BASELINES]]
+
+
 def get_final_output():
-    """The targets of the workflow: every repaired pose, the report figures, the summary, the overview and the 3D
-    viewer."""
+    """The targets of the workflow: every repaired pose (and, for a USD or glTF library, the file of each repair),
+    the report figures, the summary, the overview and the 3D viewer."""
     return [
         *[repaired_file(p) for p in POSES],
         *[baseline_repaired_file(b, p) for b in BASELINES for p in POSES],
+        *repaired_containers(),
         *expand(f"{REPORTS}/figures/{{pose}}/{{figure}}.png", pose=POSES, figure=list(POSE_FIGURES)),
         *expand(f"{REPORTS}/figures/{{pose}}/downstream.png", pose=POSES),
         f"{REPORTS}/summary.json",

@@ -128,8 +128,9 @@ rule viewer:
         " --log {log:q}"
 
 
-onerror:  # the summary of the poses that finished, then the failed jobs' posefix error lines (plain snakemake too)
+onerror:  # the summary of the poses that finished (and a USD or glTF library's files with them), then the failed jobs' posefix error lines (plain snakemake too)
     _text = "".join(Path(p).read_text(errors="replace") for p in (log if isinstance(log, list) else [log]) if p)
     _errors = failed_job_errors(_text, Path.cwd())
     partial_summary(_errors)
+    partial_containers()
     print("\n".join(map(recap_line, _errors)), file=sys.stderr)

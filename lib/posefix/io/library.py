@@ -16,6 +16,7 @@ import numpy as np
 from posefix.mesh.geometry import bbox_diagonal, edge_lengths, face_areas
 from posefix.mesh.topology import edges
 from posefix.mesh.weld import Weld
+from posefix.io.containers import container_stem, open_container
 from posefix.io.errors import InputError
 from posefix.io.meshes import MESH_SUFFIXES, MeshFile, mesh_file, read_mesh
 
@@ -44,6 +45,11 @@ class Library:
     poses: tuple
     refused: tuple = ()
     """``(path, cause)`` of the mesh files left out of the library, one pair each (:func:`file_problem`)."""
+    container: str = None
+    """The USD or glTF file the library is in (:func:`container_library`; its meshes are unpacked into ``folder``
+    by stage unpack), or None for a folder of mesh files."""
+    mesh: str = None
+    """The container's mesh (USD prim path, glTF mesh name) that holds the poses."""
 
     def pose(self, name):
         """The :class:`~posefix.io.meshes.MeshFile` of the pose called ``name``."""
@@ -128,6 +134,65 @@ def discover_library(folder, reference=None, poses=None, name=None):
     chosen, refused = _usable_poses(folder, ref, chosen)
     return Library(folder=str(folder), name=name or folder.resolve().name, reference=ref, poses=chosen,
                    refused=refused)
+
+
+def container_library(path, folder, reference=None, poses=None, name=None, mesh=None):
+    """A pose library in one USD or glTF file (:mod:`posefix.io.containers`), its meshes to be unpacked into
+    ``folder`` as ``<pose>.ply``.
+
+    Parameters
+    ----------
+    path : str or Path
+        The container file.
+    folder : str or Path
+        Where stage unpack writes each pose as a mesh file (the library's ``folder``).
+    reference : str, optional
+        The pose (frame) that is the reference, by name or by frame number (``12``); default: the rest pose (the
+        base of blend shapes and morph targets, the default value of time-sampled points), else the first frame.
+        Only frames can be another.
+    poses : list of str, optional
+        Names of the poses to repair; default: every other member (but the rest pose when a frame is the reference).
+    name : str, optional
+        Library name; default: the file's name without extension.
+    mesh : str, optional
+        The mesh holding the poses when the file has several (USD prim path, glTF mesh name).
+
+    Returns
+    -------
+    Library
+    """
+    problem = file_problem(path)
+    if problem:
+        raise InputError(path, problem)
+    box = open_container(path, mesh)
+    ref = _container_reference(box, reference)
+    members = [m for m in box.members if m != ref and not (box.rest == m and ref != box.rest)]
+    if poses:
+        missing = [p for p in poses if p not in members]
+        if missing:
+            raise InputError(path, f"pose(s) not in {box.mesh}: {', '.join(missing)} (poses: "
+                                   f"{', '.join(members[:8])}{' ...' if len(members) > 8 else ''})")
+        members = [m for m in members if m in poses]
+    if not members:
+        raise InputError(path, f"{box.mesh}: no poses besides the reference")
+    unpacked = [MeshFile(path=f"{folder}/{m}.ply", name=m, fmt="ply", gz=False) for m in [ref, *members]]
+    return Library(folder=str(folder), name=name or container_stem(path), reference=unpacked[0],
+                   poses=tuple(unpacked[1:]), container=str(path), mesh=box.mesh)
+
+
+def _container_reference(box, reference):
+    """The member of ``box`` that is the reference: ``reference`` (a name, or a frame's number), or the rest
+    pose, or the first member."""
+    if reference is None:
+        return box.rest or next(iter(box.members))
+    found = [m for m, key in box.members.items()
+             if reference == m or (isinstance(key, float) and str(reference) in (f"{key:g}", str(key)))]
+    if not found:
+        raise InputError(box.path, f"reference '{reference}' is not a pose of {box.mesh}")
+    if found[0] != box.rest and not box.rebase:
+        raise InputError(box.path, f"reference '{reference}': the reference of blend shapes and morph targets is "
+                                   f"the base they are offsets from ({box.rest})")
+    return found[0]
 
 
 def _usable_poses(folder, ref, chosen):

@@ -1,0 +1,80 @@
+# A pose library in one USD or glTF file (config library=character.usd): each pose unpacked into a mesh file under
+# results/<library>/poses/ for the stages, and the repaired poses of every repair packed back into the same kind of
+# file, results/<library>/repaired[-<baseline>]/<file name>. The rules exist only for such a library.
+
+
+def container_flags():
+    """``--container <file>`` and ``--mesh <prim>`` of the library's container for stages unpack and pack."""
+    return f"--container {shlex.quote(LIBRARY.container)} --mesh {shlex.quote(LIBRARY.mesh)}"
+
+
+if LIBRARY.container:
+
+    rule unpack:
+        input:
+            LIBRARY.container,
+        output:
+            f"{LIBRARY.folder}/{{member}}.ply",
+        wildcard_constraints:
+            member="|".join(re.escape(p.name) for p in (LIBRARY.reference, *WHOLE_LIBRARY.poses)),
+        params:
+            container=lambda wildcards: container_flags(),
+            reference=lambda wildcards: "--reference" if wildcards.member == LIBRARY.reference.name else "",
+            script=stage_script("unpack"),
+            code=stage_code("unpack"),
+        threads: 1
+        resources:
+            mem_mb=memory_mb("unpack"),
+        log:
+            f"{RESULTS}/logs/{{member}}/unpack.log",
+        benchmark:
+            f"{RESULTS}/benchmarks/{{member}}/unpack.tsv"
+        conda:
+            "../envs/posefix.yaml"
+        shell:
+            "python {params.script:q} {params.container} --pose {wildcards.member:q} {params.reference}"
+            " --out {output:q} --log {log:q}"
+
+
+    rule pack:
+        input:
+            container=LIBRARY.container,
+            repaired=lambda wildcards: [f"{RESULTS}/{wildcards.repair}/{p}.ply" for p in SUMMARY_POSES],
+        output:
+            f"{RESULTS}/{{repair}}/{os.path.basename(LIBRARY.container)}",
+        wildcard_constraints:
+            repair="repaired(-(" + "|".join(BASELINE_CHOICES) + "))?",
+        params:
+            container=lambda wildcards: container_flags(),
+            folder=lambda wildcards, output: os.path.dirname(output[0]),
+            poses=",".join(SUMMARY_POSES),  # this run's and those an earlier run finished
+            script=stage_script("pack"),
+            code=stage_code("pack"),
+        threads: 1
+        resources:
+            mem_mb=memory_mb("pack"),
+        log:
+            f"{RESULTS}/logs/pack-{{repair}}.log",
+        benchmark:
+            f"{RESULTS}/benchmarks/pack-{{repair}}.tsv"
+        conda:
+            "../envs/posefix.yaml"
+        shell:
+            "python {params.script:q} {params.container} --repaired {params.folder:q} --poses {params.poses:q}"
+            " --out {output:q} --log {log:q}"
+
+
+def partial_containers():
+    """After a failed run of a USD or glTF library: the file of each repair with the poses that finished repaired
+    and the others as in the input (stage pack), so that one bad pose does not hold back the others."""
+    for repair in ["repaired", *[f"repaired-{b}" for b in BASELINES]] if LIBRARY.container else ():
+        done = [p for p in SUMMARY_POSES if Path(f"{RESULTS}/{repair}/{p}.ply").is_file()]
+        out = f"{RESULTS}/{repair}/{os.path.basename(LIBRARY.container)}"
+        if not done or len(done) == len(SUMMARY_POSES):
+            continue
+        command = [sys.executable, stage_script("pack"), "--container", LIBRARY.container, "--mesh", LIBRARY.mesh,
+                   "--repaired", f"{RESULTS}/{repair}", "--poses", ",".join(done), "--out", out,
+                   "--log", f"{RESULTS}/logs/partial-pack-{repair}.log"]
+        if subprocess.run(command, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL).returncode == 0:
+            print(f"posefix: {out}: {len(done)} of {len(SUMMARY_POSES)} poses repaired, the others as in the input",
+                  file=sys.stderr)
