@@ -17,7 +17,7 @@ from posefix.workflow.config_check import config_problems, typed_by_schema
 from posefix.io.errors import InputError
 from posefix.workflow.fingerprint import CodeFingerprints
 from posefix.io.artifacts import read_artifact
-from posefix.io.containers import container_format, container_stem
+from posefix.io.containers import container_format, container_stem, open_container
 from posefix.io.library import Library, container_library, discover_library, read_reference
 from posefix.workflow.locks import clear_stale_locks
 from posefix.workflow.memory import memory_problem, stage_memory_mb
@@ -146,13 +146,15 @@ _VERTICES = {}
 
 def reference_vertices():
     """Vertex count of the reference: from reference.h5 when validate_reference wrote it from this file, else from
-    the mesh file (0 while it cannot be read: the demo's files not yet written, or a bad file that
-    validate_reference names)."""
+    the mesh file, or the USD or glTF file before it is unpacked (0 while it cannot be read: the demo's files not
+    yet written, or a bad file that validate_reference names)."""
     if "n" not in _VERTICES:
         checked = Path(f"{RESULTS}/reference.h5")
         try:
             if checked.is_file() and checked.stat().st_mtime >= Path(LIBRARY.reference.path).stat().st_mtime:
                 _VERTICES["n"] = int(read_artifact(f"{RESULTS}/reference.h5", "validate", [])[1]["metrics"]["vertices"])
+            elif LIBRARY.container and not Path(LIBRARY.reference.path).is_file():  # not yet unpacked
+                _VERTICES["n"] = open_container(LIBRARY.container, LIBRARY.mesh).n
             else:
                 _VERTICES["n"] = len(read_reference(LIBRARY.reference.path)[0])
         except Exception:  # noqa: BLE001  (any unreadable file: validate_reference names it)
@@ -295,3 +297,23 @@ def partial_summary(errors):
         print(f"posefix: summary of the {len(finished)} poses that finished, {len(unfinished)} listed as failed: "
               f"{REPORTS}/summary.html", file=sys.stderr)
 
+
+def container_flags():
+    """``--container <file>`` and ``--mesh <prim>`` of the library's container for stages unpack and pack."""
+    return f"--container {shlex.quote(LIBRARY.container)} --mesh {shlex.quote(LIBRARY.mesh)}"
+
+
+def partial_containers():
+    """After a failed run of a USD or glTF library: the file of each repair with the poses that finished repaired
+    and the others as in the input (stage pack), so that one bad pose does not hold back the others."""
+    for repair in ["repaired", *[f"repaired-{b}" for b in BASELINES]] if LIBRARY.container else ():
+        done = [p for p in SUMMARY_POSES if Path(f"{RESULTS}/{repair}/{p}.ply").is_file()]
+        out = f"{RESULTS}/{repair}/{os.path.basename(LIBRARY.container)}"
+        if not done or len(done) == len(SUMMARY_POSES):
+            continue
+        command = [sys.executable, stage_script("pack"), "--container", LIBRARY.container, "--mesh", LIBRARY.mesh,
+                   "--repaired", f"{RESULTS}/{repair}", "--poses", ",".join(done), "--out", out,
+                   "--log", f"{RESULTS}/logs/partial-pack-{repair}.log"]
+        if subprocess.run(command, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL).returncode == 0:
+            print(f"posefix: {out}: {len(done)} of {len(SUMMARY_POSES)} poses repaired, the others as in the input",
+                  file=sys.stderr)

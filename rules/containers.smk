@@ -3,11 +3,6 @@
 # file, results/<library>/repaired[-<baseline>]/<file name>. The rules exist only for such a library.
 
 
-def container_flags():
-    """``--container <file>`` and ``--mesh <prim>`` of the library's container for stages unpack and pack."""
-    return f"--container {shlex.quote(LIBRARY.container)} --mesh {shlex.quote(LIBRARY.mesh)}"
-
-
 if LIBRARY.container:
 
     rule unpack:
@@ -62,19 +57,3 @@ if LIBRARY.container:
         shell:
             "python {params.script:q} {params.container} --repaired {params.folder:q} --poses {params.poses:q}"
             " --out {output:q} --log {log:q}"
-
-
-def partial_containers():
-    """After a failed run of a USD or glTF library: the file of each repair with the poses that finished repaired
-    and the others as in the input (stage pack), so that one bad pose does not hold back the others."""
-    for repair in ["repaired", *[f"repaired-{b}" for b in BASELINES]] if LIBRARY.container else ():
-        done = [p for p in SUMMARY_POSES if Path(f"{RESULTS}/{repair}/{p}.ply").is_file()]
-        out = f"{RESULTS}/{repair}/{os.path.basename(LIBRARY.container)}"
-        if not done or len(done) == len(SUMMARY_POSES):
-            continue
-        command = [sys.executable, stage_script("pack"), "--container", LIBRARY.container, "--mesh", LIBRARY.mesh,
-                   "--repaired", f"{RESULTS}/{repair}", "--poses", ",".join(done), "--out", out,
-                   "--log", f"{RESULTS}/logs/partial-pack-{repair}.log"]
-        if subprocess.run(command, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL).returncode == 0:
-            print(f"posefix: {out}: {len(done)} of {len(SUMMARY_POSES)} poses repaired, the others as in the input",
-                  file=sys.stderr)

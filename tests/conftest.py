@@ -77,6 +77,14 @@ def run_stage(name, *args, check=True):
     return proc
 
 
+def snakemake(workdir, *args):
+    """Run the workflow with this interpreter's snakemake in ``workdir`` (one downstream setting, as
+    the session's demo run); returns the CompletedProcess."""
+    cmd = [sys.executable, "-m", "snakemake", "-s", str(ROOT / "Snakefile"), "--directory", str(workdir),
+           "--cores", "2", *map(str, args)]
+    return subprocess.run(cmd, capture_output=True, text=True, timeout=900)
+
+
 @pytest.fixture(scope="session")
 def demo_run(tmp_path_factory):
     """The workflow on the demo library, run locally (``snakemake --cores 2``) once per session: the
@@ -85,6 +93,17 @@ def demo_run(tmp_path_factory):
     cmd = [sys.executable, "-m", "snakemake", "-s", str(ROOT / "Snakefile"), "--directory", str(work),
            "--cores", "2"]
     proc = subprocess.run(cmd, capture_output=True, text=True, timeout=900)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    return work
+
+
+@pytest.fixture(scope="session")
+def lion_run(tmp_path_factory):
+    """The workflow on ../shared/data/lion-poses with S0 alone (``baselines=[]``; the repairs: make bench), once per
+    session: the folder it ran in (skips when the library is absent)."""
+    library = shared_library("lion-poses")
+    work = tmp_path_factory.mktemp("lion-run")
+    proc = snakemake(work, "--config", f"library={library}", "baselines=[]")
     assert proc.returncode == 0, proc.stderr[-3000:]
     return work
 

@@ -14,7 +14,7 @@ from posefix.io.artifacts import config_hash, inputs_hash
 
 STAGES = ["demo", "validate", "keyframes", "classify", "constraints", "fit", "integrate", "verify", "export",
           "downstream", "summary", "render", "overview", "skeletal_pose", "skeleton", "repair_medial",
-          "volumetric_pose", "tet_mesh", "repair_volumetric", "volumetric_animate", "viewer"]
+          "volumetric_pose", "tet_mesh", "repair_volumetric", "volumetric_animate", "viewer", "unpack", "pack"]
 
 
 def documented_datasets():

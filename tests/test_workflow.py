@@ -1,27 +1,17 @@
 """The Snakemake workflow end to end: demo library, determinism, bad libraries, the lion poses."""
 
 import json
-import subprocess
-import sys
 from pathlib import Path
 
 import h5py
 import numpy as np
 import pytest
 
-from conftest import ROOT, icosphere, shared_library
+from conftest import icosphere, shared_library, snakemake
 from posefix.workflow.demo import POSES
 from posefix.io.meshes import write_mesh
 
 pytestmark = pytest.mark.pipeline
-
-
-def snakemake(workdir, *args):
-    """Run the workflow with this interpreter's snakemake in ``workdir`` (one downstream setting, as
-    the session's demo run); returns the CompletedProcess."""
-    cmd = [sys.executable, "-m", "snakemake", "-s", str(ROOT / "Snakefile"), "--directory", str(workdir),
-           "--cores", "2", *map(str, args)]
-    return subprocess.run(cmd, capture_output=True, text=True, timeout=900)
 
 
 def _datasets(path):
@@ -216,11 +206,9 @@ def test_missing_reference_fails_at_startup(tmp_path):
 
 
 @pytest.mark.data
-def test_lion_library(tmp_path):
+def test_lion_library(lion_run):
     lib = shared_library("lion-poses")
-    proc = snakemake(tmp_path, "--config", f"library={lib}", "baselines=[]")  # S0 here; the repairs: make bench
-    assert proc.returncode == 0, proc.stderr[-3000:]
-    results = tmp_path / "results" / "lion-poses"
+    results = lion_run / "results" / "lion-poses"
     target_counts = {"lion-01": 465, "lion-04": 717, "lion-07": 903}  # SOURCES.md, independent check
     for i in range(1, 10):
         pose = f"lion-{i:02d}"
@@ -231,7 +219,7 @@ def test_lion_library(tmp_path):
             assert fh["mask"][()].sum() > 0.5 * len(fh["mask"])
         size = sum(f.stat().st_size for f in (results / pose).rglob("*") if f.is_file())
         assert size <= 25e6 and not (results / pose / "fit.checkpoint").exists(), (pose, size)  # issue 29: disk
-    _check_repaired_library(tmp_path, lib, "lion-poses")
+    _check_repaired_library(lion_run, lib, "lion-poses")
 
 
 def _check_repaired_library(work, lib, name):

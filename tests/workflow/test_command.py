@@ -8,12 +8,14 @@ import sys
 import time
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from conftest import icosphere
 from posefix.workflow.command import (WORKFLOW, build_parser, failed_job_errors, failure_line, recap_line,
                                       snakemake_command)
-from posefix.io.meshes import write_mesh
+from posefix.io.errors import InputError
+from posefix.io.meshes import read_mesh, write_mesh
 
 
 def posefix(*args, cwd):
@@ -141,6 +143,23 @@ def test_arguments_that_cannot_be_right_are_refused_in_one_line_before_anything_
     assert not (tmp_path / "posefix-logs").exists() and not (tmp_path / ".snakemake").exists()
 
 
+def test_a_usd_or_gltf_file_is_a_library_named_after_the_file(tmp_path):
+    from posefix.workflow.command import argument_problem, finished_lines, library_name
+    args = build_parser().parse_args(["report", str(tmp_path / "walk.cycle.usdz")])
+    assert library_name(args) == "walk.cycle"
+    assert argument_problem(args) == f"{tmp_path / 'walk.cycle.usdz'}: no such file"
+    args = build_parser().parse_args(["repair", str(tmp_path / "walk.fbx")])
+    assert argument_problem(args) == (f"{tmp_path / 'walk.fbx'}: not a folder, nor a USD or glTF file (.usd, .usda, "
+                                      ".usdc, .usdz, .gltf, .glb)")
+    (tmp_path / "reports").mkdir()
+    (tmp_path / "reports" / "summary.json").write_text('{"poses": []}')
+    (tmp_path / "repaired").mkdir()
+    (tmp_path / "repaired" / "walk.glb").write_bytes(b"glTF")
+    assert finished_lines(tmp_path / "reports", tmp_path, container="walk.glb")[-2:] == [
+        f"posefix: repaired meshes: {tmp_path / 'repaired'}",
+        f"posefix: repaired file: {tmp_path / 'repaired' / 'walk.glb'}"]
+
+
 def test_the_report_of_a_library_repaired_under_another_name_goes_to_that_name(tmp_path):
     report = snakemake_command(build_parser().parse_args(["report", str(tmp_path), "--config", "name=walk-2"]))
     assert report[-2:] == ["--report", "reports/walk-2/report.html"]
@@ -207,3 +226,31 @@ def test_the_report_covers_the_poses_of_the_librarys_summary_unless_told(tmp_pat
     assert snakemake_command(args)[-3:] == ["poses=a,c", "--report", "reports/walks/report.html"]
     told = build_parser().parse_args(["report", str(library), "--config", "poses=b"])
     assert [e for e in snakemake_command(told) if e.startswith("poses=")] == ["poses=b"]
+
+
+@pytest.mark.pipeline
+def test_posefix_repair_of_a_usd_file_with_a_bad_frame_repairs_the_others_and_writes_the_file(tmp_path):
+    """Issue 31: a library in one USD file through `posefix repair`; a NaN frame fails its pose in one line naming
+    the file and the frame, the other frames are repaired and written back into the file (the bad one as it was)."""
+    from containers import write_usd_frames
+    from posefix.io.containers import open_container
+    V, F = icosphere(2)
+    V = V * (1 + 0.1 * np.sin(3 * V[:, 0]) * np.cos(2 * V[:, 1]))[:, None]  # not a quadric: the fit needs that
+    bad = V * 1.2
+    bad[7] = np.nan
+    path = write_usd_frames(tmp_path / "ball.usda", V, [V * 1.1, bad, V * 0.9 + 0.05], F)
+    proc = posefix("repair", path, "--config", "baselines=[]", cwd=tmp_path)
+    assert proc.returncode != 0 and "Traceback" not in proc.stderr
+    lines = (proc.stdout + proc.stderr).splitlines()
+    assert f"posefix unpack: error: {path}: mesh /Character/Body, frame 2: 1 points are NaN or infinite (first: " \
+           "point 7)" in lines, lines
+    written = tmp_path / "results" / "ball" / "repaired" / "ball.usda"
+    assert "posefix: results/ball/repaired/ball.usda: 2 of 3 poses repaired, the others as in the input" in lines
+    back, source = open_container(written), open_container(path)
+    assert list(back.members) == ["ball-reference", "ball-1", "ball-2", "ball-3"]
+    for pose in ("ball-1", "ball-3"):
+        repaired = read_mesh(tmp_path / "results" / "ball" / "repaired" / f"{pose}.ply")[0]
+        assert np.array_equal(back.points(pose), repaired.astype(np.float32).astype(np.float64))
+    with pytest.raises(InputError, match="frame 2: 1 points are NaN"):
+        back.points("ball-2")
+    assert np.array_equal(back.points("ball-reference"), source.points("ball-reference"))

@@ -64,3 +64,14 @@ def test_more_jobs_running_than_it_names_are_counted():
     feed(progress, ["total 40"] + [line for k in range(5) for line in job_lines("fit", k, f"p{k}")])
     assert progress.feed("4 of 40 steps (10%) done") == [
         "posefix: 4 of 40 jobs done (10%); running: fit p0, fit p1 (and 3 more)"]
+
+
+def test_a_failed_job_no_longer_runs_and_an_unpacked_pose_is_named():
+    progress = RunProgress(clock=Clock())
+    unpack = [line.replace("pose=", "member=") for line in job_lines("unpack", 3, "walk-2")]
+    feed(progress, ["total 40", *unpack, *job_lines("fit", 4, "walk-1")])
+    assert progress.feed("4 of 40 steps (10%) done") == [
+        "posefix: 4 of 40 jobs done (10%); running: unpack walk-2, fit walk-1"]
+    feed(progress, ["[Sat Dec  5 11:30:44 2026]", "Error in rule unpack:", "    message: None", "    jobid: 3",
+                    "    input: walk.usda", "    output: results/walk/poses/walk-2.ply"])
+    assert progress.feed("8 of 40 steps (20%) done") == ["posefix: 8 of 40 jobs done (20%); running: fit walk-1"]

@@ -19,6 +19,7 @@ import threading
 import time
 from pathlib import Path
 
+from posefix.io.containers import CONTAINER_SUFFIXES, container_format, container_stem
 from posefix.report.tables import pose_status
 from posefix.workflow.progress import RunProgress
 
@@ -49,7 +50,8 @@ def build_parser():
     report = commands.add_parser("report", help="the HTML report of a repaired library")
     for sub in (repair, report):
         sub.add_argument("library", nargs="?", default=None,
-                         help="folder of the pose library (a reference and its poses); none: the built-in demo")
+                         help="folder of the pose library (a reference and its poses), or one USD or glTF file of "
+                              "its poses; none: the built-in demo")
         sub.add_argument("--config", nargs="+", default=[], metavar="KEY=VALUE",
                          help="config overrides, as snakemake --config (e.g. reference=a.obj poses=b,c)")
     repair.add_argument("--cores", type=int, default=2, help="cores to use (default 2)")
@@ -92,11 +94,13 @@ def report_poses(args):
 
 
 def library_name(args):
-    """The library's name in results/ and reports/: ``name=`` of ``--config`` if given, else the folder's name
-    (``demo`` without one)."""
+    """The library's name in results/ and reports/: ``name=`` of ``--config`` if given, else the folder's name or
+    the USD or glTF file's without its extension (``demo`` without one)."""
     names = [entry.split("=", 1)[1] for entry in args.config if entry.startswith("name=")]
     if names and names[-1]:
         return names[-1]
+    if args.library and container_format(args.library):
+        return container_stem(args.library)
     return Path(args.library).resolve().name if args.library else "demo"
 
 
@@ -111,7 +115,10 @@ def argument_problem(args):
     if not (WORKFLOW / "Snakefile").is_file():
         return f"no workflow next to the package ({WORKFLOW}): install it with pip install -e"
     if args.library is not None and not Path(args.library).is_dir():
-        return f"{args.library}: not a folder"
+        if not container_format(args.library):
+            return f"{args.library}: not a folder, nor a USD or glTF file ({', '.join(CONTAINER_SUFFIXES)})"
+        if not Path(args.library).is_file():
+            return f"{args.library}: no such file"
     if args.command == "repair" and args.cores < 1:
         return f"--cores {args.cores}: needs at least 1 core"
     if args.command == "repair" and args.memory is not None and args.memory <= 0:
@@ -209,9 +216,10 @@ def recap_line(line):
     return f"posefix: failed in {match.group(1)}: {match.group(2)}" if match else line
 
 
-def finished_lines(reports, results, most=10):
+def finished_lines(reports, results, most=10, container=None):
     """What a finished repair made and where (list of str): each pose's status and intersecting faces (``most``
-    poses at most, the first that are not ok first), the repaired meshes, the summary page and the 3D viewer."""
+    poses at most, the first that are not ok first), the repaired meshes (and file: ``container``, the file name of
+    a USD or glTF library), the summary page and the 3D viewer."""
     try:
         entries = json.loads((reports / "summary.json").read_text())["poses"]
     except (OSError, ValueError, KeyError):
@@ -228,6 +236,8 @@ def finished_lines(reports, results, most=10):
         lines.append(f"  ... and {len(entries) - most} more (the summary page)")
     pages = [("repaired meshes", results / "repaired"), ("summary page", reports / "summary.html"),
              ("3D viewer", reports / "viewer.html")]
+    if container:
+        pages.insert(1, ("repaired file", results / "repaired" / container))
     return lines + [f"posefix: {what}: {path}" for what, path in pages if path.exists()]
 
 
@@ -239,7 +249,9 @@ def main(argv=None):
     log_path = Path("posefix-logs") / time.strftime(f"{args.command}-%Y%m%d-%H%M%S.log")
     code, errors = run(snakemake_command(args), log_path, dry_run=args.command == "repair" and args.dry_run)
     if code == 0 and args.command == "repair" and not args.dry_run:
-        print("\n".join(finished_lines(Path("reports") / library_name(args), Path("results") / library_name(args))))
+        container = Path(args.library).name if args.library and container_format(args.library) else None
+        print("\n".join(finished_lines(Path("reports") / library_name(args), Path("results") / library_name(args),
+                                       container=container)))
     if code == 130:
         print("posefix: interrupted; run the same command again to go on", file=sys.stderr)
     elif code != 0:

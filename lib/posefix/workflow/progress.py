@@ -24,7 +24,8 @@ import time
 
 _RULE = re.compile(r"^(?:local)?rule (\w+):$")
 _JOBID = re.compile(r"^\s+jobid: (\d+)$")
-_POSE = re.compile(r"^\s+wildcards: .*\bpose=([^,]+)")
+_POSE = re.compile(r"^\s+wildcards: .*\b(?:pose|member)=([^,]+)")  # member: rule unpack's pose (or reference)
+_ERROR = re.compile(r"^Error in rule \w+:$")
 _FINISHED = re.compile(r"^Finished jobid: (\d+)")
 _STEPS = re.compile(r"^(\d+) of (\d+) steps \((\d+)%\) done")
 _TOTAL = re.compile(r"^total\s+(\d+)$")
@@ -47,6 +48,7 @@ class RunProgress:
         self.clock, self.quiet, self.shown = clock, quiet, shown
         self.running = {}  # jobid -> [rule, pose or None, start seconds]
         self._rule = self._job = None
+        self._error = False  # in an "Error in rule" block: its jobid is a job that has ended
         self._tenth, self._done = 0, (0, 0, 0)
         self._said = clock()
 
@@ -55,8 +57,11 @@ class RunProgress:
         line = line.rstrip("\n")
         rule, job, pose = _RULE.match(line), _JOBID.match(line), _POSE.match(line)
         finished, steps, total = _FINISHED.match(line), _STEPS.match(line), _TOTAL.match(line)
-        if rule:
-            self._rule = rule.group(1)
+        if rule or _ERROR.match(line):
+            self._rule, self._error = (rule.group(1), False) if rule else (None, True)
+        elif job and self._error:
+            self.running.pop(int(job.group(1)), None)
+            self._error = False
         elif job and self._rule:
             self._job = int(job.group(1))
             self.running[self._job] = [self._rule, None, self.clock()]

@@ -49,13 +49,16 @@ class UsdContainer(Container):
         stage = _open_stage(self.path)
         stage.SetEditTarget(stage.GetSessionLayer())  # the file's layers stay as read (Usd shares them)
         geom = UsdGeom.Mesh(stage.GetPrimAtPath(self.mesh))
-        if self.rebase:  # frames: a layer's time samples replace a weaker layer's, so every frame is authored
-            positions = {name: positions[name] if name in positions else self.points(name) for name in self.members}
+        points = geom.GetPointsAttr()
+        kept = {key: points.Get(_time(key)) for name, key in self.members.items()
+                if self.rebase and name not in positions}
+        for key, value in kept.items():  # a layer's time samples replace a weaker layer's: every frame is authored
+            points.Set(value, _time(key))
         for name, X in positions.items():
             key = self.members[name]
             if isinstance(key, str):
                 _set_offsets(stage, key, np.asarray(X, dtype=np.float64) - self.details["base"])
-            elif name in positions:
+            else:
                 _set_points(geom, np.asarray(X, dtype=np.float64), key)
         _export(stage, str(out))
 

@@ -1,0 +1,100 @@
+"""The workflow on pose libraries in one USD or glTF file (issue 31): the demo limb stored as USD frames, USD blend
+shapes and glTF morph targets repairs exactly as the same coordinates in OBJ files, and each repair goes back into
+a file of the input's kind; the lion library as one USD and one GLB file repairs to the folder's counts."""
+
+import json
+
+import numpy as np
+import pytest
+
+from conftest import shared_library, snakemake
+from containers import library_into_containers, write_gltf, write_usd_blend_shapes, write_usd_frames
+from posefix.io.containers import open_container
+from posefix.io.meshes import read_mesh, write_mesh
+from posefix.report.tables import pose_status
+
+pytestmark = pytest.mark.pipeline
+
+POSES = ("demo-02", "demo-03")
+"""The demo poses these runs repair (two, to keep the five runs short), with the contact repair beside S0."""
+RUN = ("baselines=[contact]",)
+
+
+def on_grid(X):
+    """``X`` rounded to multiples of 2^-16: exact in float32, and so are the differences of two such points
+    (the demo limb is within 2^7 of the origin), so frames, blend shape offsets and morph target displacements all
+    hold exactly these coordinates."""
+    return np.round(np.asarray(X) * 2.0 ** 16) / 2.0 ** 16
+
+
+@pytest.fixture(scope="module")
+def limb(tmp_path_factory, demo):
+    """The demo limb on the grid: the OBJ folder's run and the three containers' runs, {kind: (work, file)}."""
+    V_ref, F, poses = demo
+    V_ref, chosen = on_grid(V_ref), [on_grid(poses[p]) for p in POSES]
+    work = tmp_path_factory.mktemp("containers")
+    folder = work / "limb"
+    write_mesh(folder / "limb-reference.obj", V_ref, F)
+    for name, V in zip(POSES, chosen):
+        write_mesh(folder / f"{name}.obj", V, F)
+    files = {"obj": folder,
+             "usd frames": write_usd_frames(work / "frames.usda", V_ref, chosen, F),
+             "usd blend shapes": write_usd_blend_shapes(work / "shapes.usdc", V_ref, chosen, F, POSES, sparse=(0,)),
+             "glb": write_gltf(work / "targets.glb", V_ref, chosen, F, POSES, sparse=(1,))}
+    runs = {}
+    for kind, path in files.items():
+        run = work / kind.replace(" ", "-")
+        proc = snakemake(run, "--config", f"library={path}", *RUN)
+        assert proc.returncode == 0, (kind, proc.stderr[-3000:])
+        runs[kind] = (run, path)
+    return runs
+
+
+def _repaired(run, name, repair, pose):
+    return read_mesh(run / "results" / name / repair / f"{pose}.ply")
+
+
+@pytest.mark.parametrize("kind", ["usd frames", "usd blend shapes", "glb"])
+def test_a_container_repairs_bit_for_bit_as_obj_files_and_is_written_back(limb, kind):
+    (obj_run, _), (run, path) = limb["obj"], limb[kind]
+    name = path.stem
+    box = open_container(path)
+    members = [m for m in box.members if m != box.rest]  # frames-1, frames-2 or the demo pose names
+    summary = json.loads((run / "reports" / name / "summary.json").read_text())
+    assert [e["pose"] for e in summary["poses"]] == members
+    for repair in ("repaired", "repaired-contact"):
+        back = open_container(run / "results" / name / repair / path.name)
+        assert list(back.members) == list(box.members) and back.mesh == box.mesh and back.n == box.n
+        assert np.array_equal(back.faces, box.faces)
+        for member, pose in zip(members, POSES):
+            X, F = read_mesh(obj_run / "results" / "limb" / repair / f"{pose}.obj")
+            V, F2 = _repaired(run, name, repair, member)
+            assert np.array_equal(V, X) and np.array_equal(F, F2), (kind, repair, pose)  # bit for bit
+            if kind == "usd frames":  # point3f[]: the float32 of the repaired positions
+                assert np.array_equal(back.points(member), X.astype(np.float32).astype(np.float64))
+            else:  # float32 base plus float32 offsets
+                np.testing.assert_allclose(back.points(member), X, rtol=0, atol=4e-7 * np.abs(X).max())
+
+
+def summary_counts(run, name):
+    """Each pose's status and intersecting-face counts in the summary of library ``name`` run in ``run``."""
+    summary = json.loads((run / "reports" / name / "summary.json").read_text())
+    return [(pose_status(e), e["intersecting_faces"]) for e in summary["poses"]]
+
+
+def test_the_summary_counts_the_same_for_a_container_and_its_obj_files(limb):
+    counts = {kind: summary_counts(run, "limb" if kind == "obj" else path.stem) for kind, (run, path) in limb.items()}
+    assert all(c == counts["obj"] for c in counts.values()), counts
+
+
+@pytest.mark.data
+def test_the_lion_library_as_one_usd_and_one_glb_file_repairs_to_the_folders_counts(tmp_path, lion_run):
+    usd, glb, names = library_into_containers(shared_library("lion-poses"), tmp_path, "lion")
+    counts = {"folder": summary_counts(lion_run, "lion-poses")}
+    for library in (usd, glb):
+        run = tmp_path / library.suffix[1:]
+        proc = snakemake(run, "--config", f"library={library}", "baselines=[]")
+        assert proc.returncode == 0, (library, proc.stderr[-3000:])
+        counts[library.suffix] = summary_counts(run, "lion")
+    assert len(counts["folder"]) == len(names) == 9
+    assert counts[".usdc"] == counts["folder"] and counts[".glb"] == counts["folder"], counts
