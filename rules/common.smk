@@ -17,7 +17,7 @@ from posefix.workflow.config_check import config_problems, typed_by_schema
 from posefix.io.errors import InputError
 from posefix.workflow.fingerprint import CodeFingerprints
 from posefix.io.artifacts import read_artifact
-from posefix.io.containers import container_format, container_stem, open_container
+from posefix.io.containers import container_format, container_stem, member_digests, open_container
 from posefix.io.library import Library, container_library, discover_library, read_reference
 from posefix.workflow.locks import clear_stale_locks
 from posefix.workflow.memory import memory_problem, stage_memory_mb

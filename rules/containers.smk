@@ -1,13 +1,15 @@
 # A pose library in one USD or glTF file (config library=character.usd): each pose unpacked into a mesh file under
 # results/<library>/poses/ for the stages, and the repaired poses of every repair packed back into the same kind of
-# file, results/<library>/repaired[-<baseline>]/<file name>. The rules exist only for such a library.
+# file, results/<library>/repaired[-<baseline>]/<file name>. The rules exist only for such a library. A pose is
+# unpacked again (and so repaired again) only when its points or the faces change in the file.
 
 
 if LIBRARY.container:
+    MEMBER_DIGESTS = member_digests(LIBRARY.container, LIBRARY.mesh, cache=Path(".snakemake") / "posefix-containers.json")
 
     rule unpack:
         input:
-            LIBRARY.container,
+            ancient(LIBRARY.container),  # a pose reruns when its points change (params.digest), not the file's time
         output:
             f"{LIBRARY.folder}/{{member}}.ply",
         wildcard_constraints:
@@ -15,6 +17,7 @@ if LIBRARY.container:
         params:
             container=lambda wildcards: container_flags(),
             reference=lambda wildcards: "--reference" if wildcards.member == LIBRARY.reference.name else "",
+            digest=lambda wildcards: MEMBER_DIGESTS[wildcards.member],
             script=stage_script("unpack"),
             code=stage_code("unpack"),
         threads: 1

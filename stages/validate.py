@@ -10,6 +10,8 @@ so adding or fixing a pose reruns only that pose.
 """
 
 import posefix.workflow.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; runtime defaults before numpy)
+from pathlib import Path
+
 import numpy as np
 
 from posefix.mesh.geometry import bbox_diagonal
@@ -18,7 +20,7 @@ from posefix.io.artifacts import write_artifact
 from posefix.workflow.cli import run_stage, stage_parser
 from posefix.io.files import file_sha256
 from posefix.mesh.weld import Weld
-from posefix.io.library import check_seams, discover_library, read_pose, read_reference
+from posefix.io.library import check_seams, discover_library, find_reference, read_pose, read_reference
 from posefix.workflow.timings import Timings
 
 DOCS = {
@@ -45,20 +47,24 @@ def build_parser():
 def main(args, log):
     timings = Timings()
     poses = [p for p in (args.poses or "").split(",") if p] or None
-    library = discover_library(args.library, reference=args.reference, poses=poses, name=args.name)
-    log.info("library %s: reference %s, %d poses", library.name, library.reference.name, len(library.poses))
+    if args.reference_only:  # the poses need not be there (a USD or glTF library unpacks them one by one)
+        reference, checked = find_reference(args.library, args.reference), ()
+        name = args.name or Path(args.library).resolve().name
+    else:
+        library = discover_library(args.library, reference=args.reference, poses=poses, name=args.name)
+        log.info("library %s: reference %s, %d poses", library.name, library.reference.name, len(library.poses))
+        reference, checked, name = library.reference, library.poses, library.name
     with timings.step("read"):
-        V_ref, F = read_reference(library.reference.path)
+        V_ref, F = read_reference(reference.path)
         weld = Weld.of(V_ref, F)
         if weld.split:
             log.info("reference: %d vertices split along seams (welded for the repair, split again on output)",
                      len(weld.index) - len(weld.kept))
-        own = _own_intersections(library.reference.path, V_ref, F, log) if args.reference_only else 0
-        checked = () if args.reference_only else library.poses
+        own = _own_intersections(reference.path, V_ref, F, log) if args.reference_only else 0
         for i, pose in enumerate(checked, 1):
             check_seams(pose.path, weld, read_pose(pose.path, V_ref, F), V_ref, F)
             log.info("pose %d/%d %s: ok", i, len(checked), pose.name)
-    files = (library.reference,) + checked
+    files = (reference,) + tuple(checked)
     with timings.step("hash"):
         sha = [file_sha256(f.path) for f in files]
     write_artifact(
@@ -68,7 +74,7 @@ def main(args, log):
          "poses/path": np.array([f.path for f in files]),
          "poses/format": np.array([f.suffix for f in files]),
          "poses/sha256": np.array(sha)},
-        params={"library": args.library, "reference": args.reference, "poses": poses, "name": library.name,
+        params={"library": args.library, "reference": args.reference, "poses": poses, "name": name,
                 "reference_only": args.reference_only},
         inputs=[f.path for f in files], timings=timings,
         metrics={"vertices": len(V_ref), "split_vertices": len(weld.index) - len(weld.kept), "faces": len(F),

@@ -77,9 +77,12 @@ def test_a_container_repairs_bit_for_bit_as_obj_files_and_is_written_back(limb, 
 
 
 def summary_counts(run, name):
-    """Each pose's status and intersecting-face counts in the summary of library ``name`` run in ``run``."""
+    """Each pose's status (ok, fallback, check) and intersecting-face counts in the summary of library ``name`` run
+    in ``run``. (Not the number of faces stretched beyond the distortion limit that a *check* gives as its reason:
+    on lion-08 and lion-09 the float32 the files hold moves it, 67 to 65 and 71 to 55 faces of 10k, when this was
+    written.)"""
     summary = json.loads((run / "reports" / name / "summary.json").read_text())
-    return [(pose_status(e), e["intersecting_faces"]) for e in summary["poses"]]
+    return [(pose_status(e)[0], e["intersecting_faces"]) for e in summary["poses"]]
 
 
 def test_the_summary_counts_the_same_for_a_container_and_its_obj_files(limb):
@@ -98,3 +101,25 @@ def test_the_lion_library_as_one_usd_and_one_glb_file_repairs_to_the_folders_cou
         counts[library.suffix] = summary_counts(run, "lion")
     assert len(counts["folder"]) == len(names) == 9
     assert counts[".usdc"] == counts["folder"] and counts[".glb"] == counts["folder"], counts
+
+
+def test_changing_one_frame_of_the_file_reruns_only_that_pose(limb):
+    run, path = limb["usd frames"]
+    original = path.read_bytes()
+    try:
+        from pxr import Usd, UsdGeom
+        stage = Usd.Stage.Open(str(path))
+        points = UsdGeom.Mesh(stage.GetPrimAtPath("/Character/Body")).GetPointsAttr()
+        moved = np.asarray(points.Get(2), dtype=np.float32)
+        moved[0] += 0.001
+        points.Set(moved, 2)
+        stage.GetRootLayer().Save()
+        proc = snakemake(run, "-n", "--config", f"library={path}", *RUN)
+        assert proc.returncode == 0, proc.stderr[-3000:]
+        jobs = dict(line.split() for line in proc.stdout.split("Job stats:")[1].split("total")[0].splitlines()[3:]
+                    if line.strip())
+        assert jobs["unpack"] == "1" and jobs["fit"] == "1" and jobs["pack"] == "2", jobs  # frame 2 alone
+        assert "member=frames-2" in proc.stdout and "member=frames-1" not in proc.stdout
+        assert "pose=frames-1" not in proc.stdout
+    finally:
+        path.write_bytes(original)

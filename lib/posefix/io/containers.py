@@ -8,14 +8,18 @@ members' positions replaced. Every problem is an :class:`~posefix.io.errors.Inpu
 prim or target, in one line.
 """
 
+import hashlib
 import importlib
+import json
 import os
 import re
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 
 from posefix.io.errors import InputError
+from posefix.io.files import atomic_write_bytes
 
 CONTAINER_SUFFIXES = {".usd": "usd", ".usda": "usd", ".usdc": "usd", ".usdz": "usd", ".gltf": "gltf", ".glb": "gltf"}
 """Format module (under :mod:`posefix.io.formats`) by lower-case file extension."""
@@ -59,9 +63,24 @@ class Container:
         """Where the member ``name`` is in the file, e.g. ``mesh /Root/Body, frame 12`` (str)."""
         raise NotImplementedError
 
+    def values(self, name):
+        """The points of member ``name`` as the file holds them, unchecked: (k, 3) float64."""
+        raise NotImplementedError
+
     def points(self, name):
         """The points of member ``name``: (n, 3) float64, checked by :func:`check_points`."""
-        raise NotImplementedError
+        P = self.values(name)
+        check_points(self.path, self.where(name), P, self.n)
+        return P
+
+    def digest(self, name):
+        """sha256 (hex) of member ``name``'s points and the mesh's faces (of its problem where it has one): a pose
+        whose digest is unchanged is the same pose, however else the file changed."""
+        try:
+            data = self.values(name).tobytes()
+        except InputError as exc:
+            data = str(exc).encode()
+        return hashlib.sha256(data + self.faces.tobytes()).hexdigest()
 
     def write(self, out, positions):
         """Write the file to ``out`` (same format) with the members of ``positions`` ({name: (n, 3) float})
@@ -164,3 +183,35 @@ def pose_names(path, labels):
                                    "rename one")
         seen[name] = label
     return names
+
+
+def member_digests(path, mesh=None, cache=None):
+    """{pose name: :meth:`Container.digest`} of every member of the container file ``path``.
+
+    Parameters
+    ----------
+    path : str or Path
+    mesh : str, optional
+        As for :func:`open_container`.
+    cache : str or Path, optional
+        JSON file of the digests by file, mesh, size and modification time: an unchanged file is not read again.
+
+    Returns
+    -------
+    dict
+    """
+    st = os.stat(path)
+    key, entries = f"{os.path.abspath(path)}|{mesh}", {}
+    if cache is not None and os.path.isfile(cache):
+        try:
+            entries = json.loads(Path(cache).read_text())
+        except ValueError:  # a cache cut short: start over
+            entries = {}
+    entry = entries.get(key)
+    if entry is None or entry["stat"] != [st.st_size, st.st_mtime_ns]:
+        box = open_container(path, mesh)
+        entry = entries[key] = {"stat": [st.st_size, st.st_mtime_ns],
+                                "digests": {name: box.digest(name) for name in box.members}}
+        if cache is not None:
+            atomic_write_bytes(cache, json.dumps(entries, indent=0, sort_keys=True).encode())
+    return entry["digests"]

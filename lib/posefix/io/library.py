@@ -111,18 +111,7 @@ def discover_library(folder, reference=None, poses=None, name=None):
         read (:func:`file_problem`), two files with the same pose name, or no target pose.
     """
     folder = Path(folder)
-    if not folder.is_dir():
-        raise InputError(folder, "not a folder")
-    files = [mesh_file(p) for p in sorted(folder.iterdir())
-             if (p.is_file() or p.is_symlink()) and not p.name.startswith(".")]  # hidden: ._x.obj (macOS), ...
-    files = [f for f in files if f is not None]
-    if not files:
-        raise InputError(folder, f"no mesh files {MESH_SUFFIXES}")
-    by_name = {}
-    for f in files:
-        if f.name in by_name:
-            raise InputError(f.path, f"same pose name '{f.name}' as {os.path.basename(by_name[f.name].path)}")
-        by_name[f.name] = f
+    files, by_name = _mesh_files(folder)
     ref = _pick_reference(folder, files, by_name, reference)
     if poses:
         missing = [p for p in poses if _lookup(by_name, p) is None]
@@ -193,6 +182,31 @@ def _container_reference(box, reference):
         raise InputError(box.path, f"reference '{reference}': the reference of blend shapes and morph targets is "
                                    f"the base they are offsets from ({box.rest})")
     return found[0]
+
+
+def find_reference(folder, reference=None):
+    """The :class:`~posefix.io.meshes.MeshFile` of the reference in ``folder``, picked as :func:`discover_library`
+    picks it, whether or not the poses are there yet (a USD or glTF library's poses are unpacked one by one)."""
+    files, by_name = _mesh_files(Path(folder))
+    return _pick_reference(Path(folder), files, by_name, reference)
+
+
+def _mesh_files(folder):
+    """``(files, by_name)``: the mesh files of ``folder`` in name order (not hidden ones) and by pose name;
+    InputError for a missing folder, no mesh file, or two files of one pose name."""
+    if not folder.is_dir():
+        raise InputError(folder, "not a folder")
+    files = [mesh_file(p) for p in sorted(folder.iterdir())
+             if (p.is_file() or p.is_symlink()) and not p.name.startswith(".")]  # hidden: ._x.obj (macOS), ...
+    files = [f for f in files if f is not None]
+    if not files:
+        raise InputError(folder, f"no mesh files {MESH_SUFFIXES}")
+    by_name = {}
+    for f in files:
+        if f.name in by_name:
+            raise InputError(f.path, f"same pose name '{f.name}' as {os.path.basename(by_name[f.name].path)}")
+        by_name[f.name] = f
+    return files, by_name
 
 
 def _usable_poses(folder, ref, chosen):

@@ -13,7 +13,7 @@ import base64
 import numpy as np
 import pygltflib
 
-from posefix.io.containers import REST, Container, check_points, container_stem, pose_names
+from posefix.io.containers import REST, Container, container_stem, pose_names
 from posefix.io.errors import InputError
 from posefix.io.files import atomic_write_bytes
 
@@ -34,14 +34,13 @@ class GltfContainer(Container):
         key = self.members[name]
         return f"mesh {self.mesh}, " + ("base positions" if key is None else f"morph target {key} ({name})")
 
-    def points(self, name):
+    def values(self, name):
         key, (gltf, buffers) = self.members[name], (self.details["gltf"], self.details["buffers"])
         P = self.details["base"].copy()
         for primitive, first, count in self.details["spans"] if key is not None else ():
             accessor = _target_position(primitive.targets[key])
             if accessor is not None:
                 P[first:first + count] += read_accessor(self.path, gltf, buffers, accessor, count)
-        check_points(self.path, self.where(name), P, self.n)
         return P
 
     def write(self, out, positions):

@@ -15,7 +15,7 @@ import tempfile
 import numpy as np
 from pxr import Tf, Usd, UsdGeom, UsdSkel, UsdUtils, Vt
 
-from posefix.io.containers import REST, Container, check_points, container_stem, fan_triangles, pose_names
+from posefix.io.containers import REST, Container, container_stem, fan_triangles, pose_names
 from posefix.io.errors import InputError
 from posefix.io.files import atomic_path
 
@@ -30,19 +30,17 @@ class UsdContainer(Container):
             return f"mesh {self.mesh}, blend shape {key}"
         return f"mesh {self.mesh}, " + ("default (rest) points" if key is None else f"frame {key:g}")
 
-    def points(self, name):
+    def values(self, name):
         key = self.members[name]
-        if isinstance(key, str):
-            P = self.details["base"].copy()
-            offsets, indices = _shape_offsets(self.details["stage"], key)
-            if indices is None and len(offsets) != self.n or indices is not None and len(indices) != len(offsets):
-                raise InputError(self.path, f"{self.where(name)}: {len(offsets)} offsets for "
-                                            f"{self.n if indices is None else len(indices)} points")
-            P[slice(None) if indices is None else indices] += offsets
-        else:
+        if not isinstance(key, str):
             value = _points_attr(self.details["stage"], self.mesh).Get(_time(key))
-            P = np.asarray(value if value is not None else [], dtype=np.float64).reshape(-1, 3)
-        check_points(self.path, self.where(name), P, self.n)
+            return np.asarray(value if value is not None else [], dtype=np.float64).reshape(-1, 3)
+        P = self.details["base"].copy()
+        offsets, indices = _shape_offsets(self.details["stage"], key)
+        if indices is None and len(offsets) != self.n or indices is not None and len(indices) != len(offsets):
+            raise InputError(self.path, f"{self.where(name)}: {len(offsets)} offsets for "
+                                        f"{self.n if indices is None else len(indices)} points")
+        P[slice(None) if indices is None else indices] += offsets
         return P
 
     def write(self, out, positions):
