@@ -107,12 +107,12 @@ def test_changing_one_frame_of_the_file_reruns_only_that_pose(limb):
     run, path = limb["usd frames"]
     original = path.read_bytes()
     try:
-        from pxr import Usd, UsdGeom
+        from pxr import Usd, UsdGeom, Vt
         stage = Usd.Stage.Open(str(path))
         points = UsdGeom.Mesh(stage.GetPrimAtPath("/Character/Body")).GetPointsAttr()
-        moved = np.asarray(points.Get(2), dtype=np.float32)
+        moved = np.array(points.Get(2), dtype=np.float32)
         moved[0] += 0.001
-        points.Set(moved, 2)
+        points.Set(Vt.Vec3fArray.FromNumpy(moved), 2)
         stage.GetRootLayer().Save()
         proc = snakemake(run, "-n", "--config", f"library={path}", *RUN)
         assert proc.returncode == 0, proc.stderr[-3000:]
