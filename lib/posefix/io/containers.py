@@ -9,6 +9,7 @@ prim or target, in one line.
 """
 
 import hashlib
+from abc import ABC, abstractmethod
 import importlib
 import json
 import os
@@ -29,7 +30,7 @@ morph targets, the default value of time-sampled points), named as a folder's re
 
 
 @dataclass
-class Container:
+class Container(ABC):
     """One mesh of a container file and its poses.
 
     Attributes
@@ -59,13 +60,13 @@ class Container:
     details: dict = field(default_factory=dict)
     """Format-specific data of the opened file (the format module's own)."""
 
+    @abstractmethod
     def where(self, name):
         """Where the member ``name`` is in the file, e.g. ``mesh /Root/Body, frame 12`` (str)."""
-        raise NotImplementedError
 
+    @abstractmethod
     def values(self, name):
         """The points of member ``name`` as the file holds them, unchecked: (k, 3) float64."""
-        raise NotImplementedError
 
     def points(self, name):
         """The points of member ``name``: (n, 3) float64, checked by :func:`check_points`."""
@@ -82,10 +83,10 @@ class Container:
             data = str(exc).encode()
         return hashlib.sha256(data + self.faces.tobytes()).hexdigest()
 
+    @abstractmethod
     def write(self, out, positions):
         """Write the file to ``out`` (same format) with the members of ``positions`` ({name: (n, 3) float})
         replaced, atomically; everything else as read."""
-        raise NotImplementedError
 
 
 def container_format(path):
