@@ -28,6 +28,10 @@ def test_fan_triangles_of_a_triangle_a_quad_and_a_pentagon():
 def test_pose_names_replace_what_a_file_name_cannot_carry():
     assert pose_names("x", ["jaw/open", "{a}", "smile", ".hidden"]) == ["jaw_open", "_a_", "smile", "hidden"]
     assert container_stem("/a/b/character.anim.usdz") == "character.anim"
+    with pytest.raises(InputError, match="two poses would both be named 'jaw_open' \\('jaw open' and 'jaw/open'\\)"):
+        pose_names("x.glb", ["jaw open", "jaw/open"])
+    with pytest.raises(InputError, match="named 'x-reference' \\(the rest pose and 'x-reference'\\)"):
+        pose_names("x.glb", ["smile", "x-reference"], rest="x-reference")
 
 
 def test_a_frame_library_takes_the_rest_pose_as_reference_and_names_frames_in_time_order(tmp_path, sphere):

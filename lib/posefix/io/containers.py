@@ -165,11 +165,11 @@ def check_points(path, where, P, n):
         raise InputError(path, f"{where}: {bad.sum()} points are NaN or infinite (first: point {np.argmax(bad)})")
 
 
-def pose_names(path, labels):
+def pose_names(path, labels, rest=None):
     """Pose names of members labelled ``labels`` (frame numbers, blend shape or target names), in order.
 
     Characters a file name or a Snakemake rule cannot carry (``/``, braces, spaces, control characters) become
-    ``_``; InputError when two members get the same name.
+    ``_``; InputError when two members get the same name, or one the name of the rest pose ``rest``.
 
     Examples
     --------
@@ -177,12 +177,12 @@ def pose_names(path, labels):
     ['jaw_open', 'smile']
     """
     names = [re.sub(r"[^\w.+-]", "_", str(label)).lstrip(".") or "_" for label in labels]
-    seen = {}
+    seen = {rest: "the rest pose"} if rest else {}
     for label, name in zip(labels, names):
         if name in seen:
-            raise InputError(path, f"two poses would both be named '{name}' ({seen[name]!r} and {label!r}): "
+            raise InputError(path, f"two poses would both be named '{name}' ({seen[name]} and {label!r}): "
                                    "rename one")
-        seen[name] = label
+        seen[name] = repr(label)
     return names
 
 

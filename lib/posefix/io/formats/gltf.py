@@ -83,8 +83,9 @@ def open_container(path, mesh=None):
     labels = (chosen.extras or {}).get("targetNames") or []
     if len(labels) != n_targets:
         labels = [f"target-{k:0{len(str(n_targets - 1))}d}" for k in range(n_targets)]
-    members = {f"{container_stem(path)}-{REST}": None, **dict(zip(pose_names(path, labels), range(n_targets)))}
-    return GltfContainer(path=path, mesh=label, members=members, rest=f"{container_stem(path)}-{REST}",
+    rest = f"{container_stem(path)}-{REST}"
+    members = {rest: None, **dict(zip(pose_names(path, labels, rest), range(n_targets)))}
+    return GltfContainer(path=path, mesh=label, members=members, rest=rest,
                          faces=np.concatenate(faces), n=first, rebase=False,
                          details={"gltf": gltf, "buffers": buffers, "base": np.concatenate(base), "spans": spans})
 

@@ -145,7 +145,8 @@ def _blend_shapes(path, prim, rest):
     for target in targets:
         if not prim.GetStage().GetPrimAtPath(target).IsA(UsdSkel.BlendShape):
             raise InputError(path, f"{where}: blend shape target {target} is not a BlendShape prim")
-    members = {f"{container_stem(path)}-{REST}": None, **dict(zip(pose_names(path, labels), targets))}
+    rest_name = f"{container_stem(path)}-{REST}"
+    members = {rest_name: None, **dict(zip(pose_names(path, labels, rest_name), targets))}
     return members, {"base": np.asarray(rest, dtype=np.float64).reshape(-1, 3)}
 
 
