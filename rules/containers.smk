@@ -5,7 +5,8 @@
 
 
 if LIBRARY.container:
-    MEMBER_DIGESTS = member_digests(LIBRARY.container, LIBRARY.mesh, cache=Path(".snakemake") / "posefix-containers.json")
+    MEMBER_DIGESTS = member_digests(LIBRARY.container, LIBRARY.mesh,
+                                    cache=Path(".snakemake") / "posefix-containers.json")
 
     rule unpack:
         input:
