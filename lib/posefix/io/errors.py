@@ -10,3 +10,10 @@ class InputError(Exception):
     def __init__(self, path, problem):
         super().__init__(f"{path}: {problem}")
         self.path, self.problem = str(path), problem
+
+
+def one_line(exc):
+    """The first line of an exception's message (at most 200 characters), or its type's name (str), for an
+    :class:`InputError` built from a library's exception."""
+    text = str(exc).strip().splitlines()
+    return (text[0] if text else type(exc).__name__)[:200]

@@ -15,7 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 import trimesh
 
-from posefix.io.errors import InputError
+from posefix.io.errors import InputError, one_line
 from posefix.io.files import atomic_write_bytes
 from posefix.io.formats import FORMATS
 
@@ -93,7 +93,7 @@ def read_mesh(path):
         V = np.asarray(mesh.vertices, dtype=np.float64)
         F = np.asarray(mesh.faces, dtype=np.int64).reshape(-1, 3)
     except Exception as exc:  # trimesh raises many types for malformed files
-        reason = _one_line(exc)
+        reason = one_line(exc)
         if re.search(r"out of bounds|outside the range", reason):
             raise InputError(path, f"a face has a vertex index out of range ({reason})") from None
         raise InputError(path, f"cannot be read as {mf.fmt.upper()}: {reason}") from None
@@ -114,7 +114,7 @@ def _read_bytes(mf):
         try:
             data = gzip.decompress(data)
         except (OSError, EOFError) as exc:
-            raise InputError(mf.path, f"not a valid gzip file: {_one_line(exc)}") from None
+            raise InputError(mf.path, f"not a valid gzip file: {one_line(exc)}") from None
         if not data:
             raise InputError(mf.path, "empty file (after gunzip)")
     return data
@@ -185,9 +185,3 @@ def write_like(path, V, F, source):
 
 def _write(mf, data):
     atomic_write_bytes(mf.path, gzip.compress(data, compresslevel=6, mtime=0) if mf.gz else data)
-
-
-def _one_line(exc):
-    """The first line of an exception's message (at most 200 characters), or its type's name."""
-    text = str(exc).strip().splitlines()
-    return (text[0] if text else type(exc).__name__)[:200]

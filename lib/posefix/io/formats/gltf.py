@@ -14,7 +14,7 @@ import numpy as np
 import pygltflib
 
 from posefix.io.containers import REST, Container, container_stem, pose_names
-from posefix.io.errors import InputError
+from posefix.io.errors import InputError, one_line
 from posefix.io.files import atomic_write_bytes
 
 COMPONENTS = {5120: "i1", 5121: "u1", 5122: "i2", 5123: "u2", 5125: "u4", 5126: "f4"}
@@ -101,7 +101,7 @@ def _load(path):
     try:
         gltf = pygltflib.GLTF2().load(str(path))
     except Exception as exc:  # noqa: BLE001  (json, struct and IO errors of a bad file)
-        raise InputError(path, f"cannot be read as glTF: {_one_line(exc)}") from None
+        raise InputError(path, f"cannot be read as glTF: {one_line(exc)}") from None
     if gltf is None:
         raise InputError(path, "cannot be read as glTF: no JSON chunk")
     unread = sorted(set(gltf.extensionsRequired or ()) - READ_EXTENSIONS)
@@ -113,17 +113,12 @@ def _load(path):
         try:
             data = gltf.get_data_from_buffer_uri(buffer.uri)
         except Exception as exc:  # noqa: BLE001  (a missing .bin file, a bad data URI)
-            raise InputError(path, f"buffer {k} ({buffer.uri}) cannot be read: {_one_line(exc)}") from None
+            raise InputError(path, f"buffer {k} ({buffer.uri}) cannot be read: {one_line(exc)}") from None
         if data is None or len(data) < (buffer.byteLength or 0):
             raise InputError(path, f"buffer {k} has {0 if data is None else len(data)} bytes, the file declares "
                                    f"{buffer.byteLength} (truncated file?)")
         buffers.append(bytes(data))
     return gltf, buffers
-
-
-def _one_line(exc):
-    text = str(exc).strip().splitlines()
-    return (text[0] if text else type(exc).__name__)[:200]
 
 
 def _mesh_by_name(path, gltf, mesh):
