@@ -1,15 +1,16 @@
 """Repairs compared (`make bench`, or alone: `.venv/bin/python benchmarks/repairs.py`): reports/bench/repairs.md.
 
 Five repairs of every pose of lion, cat, horse and camel (../shared/data) and the demo library, from the same
-targets: space-time integration (S0) with the snap finish and with the contact finish (config
-``verify.finish``), the medial repair (S1's balls and flow), the volumetric fill (S4's editor) and the contact
-repair (the IPC contact solver through S0's key frames). The pipeline runs twice per library in one go: with
-the contact finish and every baseline (results/<library>), then with the snap finish alone
-(results/<library>-snap-finish, from the first run's artifacts up to integrate), the downstream check towards every repaired pose both times
+targets: space-time integration (S0) with the contact finish's elastic and positional goals (config
+``verify.free_goal``: elastic, the default, and blend), the medial repair (S1's balls and flow), the volumetric fill
+(S4's editor) and the contact repair (the IPC contact solver through S0's key frames). The pipeline runs twice per
+library in one go: with the elastic finish and every baseline (results/<library>), then with the positional finish
+alone (results/<library>-positional-finish, from the first run's artifacts up to integrate), the downstream check
+towards every repaired pose both times
 (``downstream.baselines: true``; Snakemake reuses what is up to date; ``--quick-downstream``: the default one setting,
 alpha 1 and k_b 1e-2, instead of the grid). One table from the summary.json files:
-poses with no new intersecting face (S0's snap: outside its pass-through regions), poses "ok" (clean, V_C
-within the bar, no distorted face), deviation from the target over V_C and over the free vertices (relative
+poses with no new intersecting face, poses "ok" (the report's status), deviation from the target over V_C and
+over the free vertices (relative
 to the bbox diagonal), the worst edge-length and area ratios against the target and the distorted faces,
 Gauss-Newton runs converged and their iterations, seconds per pose.
 """
@@ -28,7 +29,7 @@ import numpy as np
 
 from posefix.downstream.check import GRID
 from posefix.workflow.timings import benchmark_seconds
-from posefix.report.tables import pose_status, repair_seconds
+from posefix.report.tables import entry_status, repair_seconds
 
 ROOT = Path(__file__).resolve().parents[1]
 DATA = Path(os.environ.get("POSEFIX_DATA", ROOT.parent / "shared" / "data"))
@@ -36,9 +37,10 @@ LIBRARIES = ("lion-poses", "cat-poses", "horse-poses", "camel-poses")
 CHECK_BASELINES = f"downstream={ {'baselines': True, **GRID} }"
 """The downstream check towards every repair over the grid of six settings (``make bench``)."""
 QUICK_DOWNSTREAM = "downstream={'baselines': True}"
-CONTACT_FINISH = "verify={'finish': 'contact'}"
-SNAP_FINISH = ("verify={'finish': 'snap'}", "baselines=[]")
-"""The second run of a library: S0 with the snap finish, no baselines (they are the first run's)."""
+ELASTIC_FINISH = "verify={'finish': 'contact', 'free_goal': 'elastic'}"
+POSITIONAL_FINISH = ("verify={'finish': 'contact', 'free_goal': 'blend'}", "baselines=[]")
+"""The second run of a library: S0 with the positional finish, no baselines (they are the first run's)."""
+SUFFIX = "-positional-finish"
 
 
 def run_library(lib, cores, out, extra=(CHECK_BASELINES,), suffix=""):
@@ -54,12 +56,12 @@ def run_library(lib, cores, out, extra=(CHECK_BASELINES,), suffix=""):
 
 
 UPSTREAM = ("validate", "keyframes", "classify", "constraints", "fit", "integrate")
-"""S0's stages before verify: the snap run takes them from the contact run (same inputs, same config)."""
+"""S0's stages before verify: the positional run takes them from the elastic run (same inputs, same config)."""
 
 
-def seed_snap_run(name, suffix):
+def seed_second_run(name, suffix):
     """Copy S0's upstream artifacts and benchmark files of results/<name> into results/<name><suffix>, with their
-    times, where missing or older: the snap run then computes verify and what follows only."""
+    times, where missing or older: the positional run then computes verify and what follows only."""
     source, dest = ROOT / "results" / name, ROOT / "results" / (name + suffix)
     files = [source / "reference.h5"] + [f for stage in UPSTREAM for f in source.glob(f"*/{stage}.h5")]
     files += [f for stage in UPSTREAM for f in (source / "benchmarks").glob(f"*/{stage}.tsv")]
@@ -73,16 +75,16 @@ def seed_snap_run(name, suffix):
 def finish_seconds(name, poses):
     """Wall seconds of stage verify per pose with each finish, one process at a time on the same artifacts of
     results/<name> (the pipeline runs jobs side by side, so its own benchmark files mix in their contention):
-    {pose: {"contact": s, "snap": s}}."""
+    {pose: {"elastic": s, "positional": s}}."""
     out = {}
     for pose in poses:
         folder = ROOT / "results" / name / pose
         inputs = [f"--{k}={folder / f'{k}.h5'}" for k in ("keyframes", "classify", "integrate", "fit")]
         out[pose] = {}
-        for finish in ("contact", "snap"):
+        for finish, goal in (("elastic", "elastic"), ("positional", "blend")):
             with tempfile.TemporaryDirectory() as tmp:
                 start = time.perf_counter()
-                subprocess.run([sys.executable, str(ROOT / "stages" / "verify.py"), *inputs, "--finish", finish,
+                subprocess.run([sys.executable, str(ROOT / "stages" / "verify.py"), *inputs, "--free-goal", goal,
                                 "--threads", "1", "--out", str(Path(tmp) / "verify.h5")], check=True,
                                capture_output=True)
                 out[pose][finish] = time.perf_counter() - start
@@ -91,17 +93,17 @@ def finish_seconds(name, poses):
 
 def finish_markdown(result):
     """The table of :func:`finish_seconds` with S0's other stages added (list of str)."""
-    lines = ["", "### Seconds per pose: the contact finish against the snap finish", "",
+    lines = ["", "### Seconds per pose: the elastic finish against the positional finish", "",
              "Stage verify alone, one process at a time on the same artifacts (`--threads 1`), plus S0's stages "
-             "keyframes to integrate (the pipeline's benchmark files of the contact run).", "",
-             "| library | pose | keyframes to integrate s | verify contact s | verify snap s | S0 contact s | S0 snap s "
-             "| ratio |", "|---|---|---:|---:|---:|---:|---:|---:|"]
+             "keyframes to integrate (the pipeline's benchmark files of the elastic run).", "",
+             "| library | pose | keyframes to integrate s | verify elastic s | verify positional s | S0 elastic s "
+             "| S0 positional s | ratio |", "|---|---|---:|---:|---:|---:|---:|---:|"]
     for name, r in result["libraries"].items():
         for pose, t in r["finish_seconds"].items():
             before = r["upstream_seconds"][pose]
-            lines.append(f"| {name} | {pose} | {before:.1f} | {t['contact']:.1f} | {t['snap']:.1f} | "
-                         f"{before + t['contact']:.1f} | {before + t['snap']:.1f} | "
-                         f"{(before + t['contact']) / (before + t['snap']):.2f} |")
+            lines.append(f"| {name} | {pose} | {before:.1f} | {t['elastic']:.1f} | {t['positional']:.1f} | "
+                         f"{before + t['elastic']:.1f} | {before + t['positional']:.1f} | "
+                         f"{(before + t['elastic']) / (before + t['positional']):.2f} |")
     return lines + [""]
 
 
@@ -115,28 +117,28 @@ def gauss_newton(downstream, example):
 BASELINES = ("medial", "volumetric", "contact")
 LIBRARY_STAGES = {"medial": "skeleton", "volumetric": "tet_mesh"}
 """The once-per-library stage of a baseline (its seconds are reported apart)."""
-REPAIRS = ("S0 contact finish", "S0 snap", *BASELINES)
+REPAIRS = ("space-time, elastic finish", "space-time, positional finish", *BASELINES)
 
 
-def method_rows(contact, snap):
-    """Per repair of :data:`REPAIRS`: the figures of one library over its poses (dict of dicts); ``contact`` and
-    ``snap``: the summary entries of the two runs (the baselines are the first's)."""
+def method_rows(elastic, positional):
+    """Per repair of :data:`REPAIRS`: the figures of one library over its poses (dict of dicts); ``elastic`` and
+    ``positional``: the summary entries of the two runs (the baselines are the first's)."""
     rows = {finish: _aggregate([_s0_row(e) for e in entries]) for finish, entries in
-            (("S0 contact finish", contact), ("S0 snap", snap))}
+            zip(REPAIRS[:2], (elastic, positional))}
     for name in BASELINES:
         rows[name] = _aggregate([{"clean": b["intersecting_faces"]["repaired_new"] == 0, "ok": None,
                                   "new": b["intersecting_faces"]["repaired_new"], "deviation": b["deviation"],
                                   "distortion": b.get("distortion"), "seconds": b["seconds"],
                                   "gn": gauss_newton(b["downstream"], name) if "downstream" in b else None}
-                                 for b in (e["baselines"][name] for e in contact)])
-    rows["target"] = {"gn": np.sum([gauss_newton(e["downstream"], "original") for e in contact], axis=0).tolist()}
+                                 for b in (e["baselines"][name] for e in elastic)])
+    rows["target"] = {"gn": np.sum([gauss_newton(e["downstream"], "original") for e in elastic], axis=0).tolist()}
     return rows
 
 
 def _s0_row(e):
     faces = e["intersecting_faces"]
     return {"clean": faces["repaired_new"] == faces["repaired_new_in_fallback"], "new": faces["repaired_new"],
-            "ok": pose_status(e)[0] == "ok", "deviation": e["deviation"], "distortion": e.get("distortion"),
+            "ok": entry_status(e)[0] == "ok", "deviation": e["deviation"], "distortion": e.get("distortion"),
             "seconds": repair_seconds(e), "gn": gauss_newton(e["downstream"], "repaired")}
 
 
@@ -159,12 +161,12 @@ def _aggregate(rows):
 
 def markdown(result):
     """The section 'Repairs compared' of BENCHMARKS.md (list of str)."""
-    lines = ["## Repairs compared: space-time (snap and contact finish), medial, volumetric, contact", "",
+    lines = ["## Repairs compared: space-time (elastic and positional finish), medial, volumetric, contact", "",
              "Every pose of each library, the five repairs from the same target (`benchmarks/repairs.py`, which also "
-             "runs alone). Per pose: `summary-<library>.md` (contact finish and the baselines) and "
-             "`summary-<library>-snap-finish.md`." + (" Downstream check: one setting (alpha 1, k_b 1e-2)."
+             "runs alone). Per pose: `summary-<library>.md` (elastic finish and the baselines) and "
+             f"`summary-<library>{SUFFIX}.md`." + (" Downstream check: one setting (alpha 1, k_b 1e-2)."
                                                       if result["quick_downstream"] else ""), "",
-             "| library | repair | poses | 0 new faces (snap: outside pass-through) | new faces (all poses) | ok | "
+             "| library | repair | poses | 0 new faces | new faces (all poses) | ok | "
              "V_C dev. mean (mean over poses) | V_C max | free mean | free max | worst edge / area ratio | distorted "
              "faces | GN converged / runs | GN iterations (all runs) | seconds per pose |",
              "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---|---:|---:|---:|---:|"]
@@ -175,7 +177,8 @@ def markdown(result):
         lines.append(f"| {name} | (target, unrepaired) | | | | | | | | | | | {t[0]} / {t[1]} | {t[2]} | |")
     lines += ["", "Deviations are from the target, relative to the reference's bbox diagonal, over S0's V_C (classify) "
                   "and the other (free) vertices. ok: the report's status (no new intersecting face outside the "
-                  "pass-through regions, V_C max within 5e-3, no distorted face; S0 only). Ratios: the worst "
+                  "pass-through regions, V_C max within 1e-3, a converged finish, no face beyond 10x and at most 0.1% "
+                  "beyond the distortion limit; S0 only). Ratios: the worst "
                   "edge-length and face-area ratio (or its inverse) against the target over all poses; distorted: "
                   "faces beyond config summary.distortion_limit against both the target and the reference. GN: the "
                   "downstream Gauss-Newton check (S0 §5) over config downstream's grid towards each pose. Seconds: "
@@ -225,13 +228,13 @@ def main():
     check = QUICK_DOWNSTREAM if args.quick_downstream else CHECK_BASELINES
     for lib in libraries:
         name = lib.name if lib else "demo"
-        contact = run_library(lib, args.cores, out, [check, CONTACT_FINISH])
-        seed_snap_run(name, "-snap-finish")
-        snap = run_library(lib, args.cores, out, [check, *SNAP_FINISH], "-snap-finish")
-        rows = method_rows(contact, snap)
-        rows["finish_seconds"] = finish_seconds(name, [e["pose"] for e in contact])
+        elastic = run_library(lib, args.cores, out, [check, ELASTIC_FINISH])
+        seed_second_run(name, SUFFIX)
+        positional = run_library(lib, args.cores, out, [check, *POSITIONAL_FINISH], SUFFIX)
+        rows = method_rows(elastic, positional)
+        rows["finish_seconds"] = finish_seconds(name, [e["pose"] for e in elastic])
         rows["upstream_seconds"] = {e["pose"]: repair_seconds(e) - (e["seconds_stages"].get("verify") or 0.0)
-                                    for e in contact}
+                                    for e in elastic}
         rows["commit"] = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT, capture_output=True,
                                         text=True).stdout.strip()
         rows["library_seconds"] = {stage: benchmark_seconds(ROOT / "results" / name / "benchmarks", stage) or 0.0

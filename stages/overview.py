@@ -15,7 +15,7 @@ from posefix.io.errors import InputError
 from posefix.io.files import atomic_write_bytes, write_figure
 from posefix.workflow.timings import Timings
 from posefix.report.figures import library_overview
-from posefix.report.tables import DEVIATION_BAR, pose_status, summary_html
+from posefix.report.tables import entry_status, summary_html
 
 
 def build_parser():
@@ -23,8 +23,6 @@ def build_parser():
     parser.add_argument("--summary", required=True, help="summary.json of the library")
     parser.add_argument("--png", required=True, help="overview.png to write")
     parser.add_argument("--html", required=True, help="summary.html to write")
-    parser.add_argument("--bar", type=float, default=DEVIATION_BAR,
-                        help="V_C max deviation / bbox diagonal above which a pose is flagged")
     return parser
 
 
@@ -36,10 +34,10 @@ def main(args, log):
     except (ValueError, KeyError, TypeError) as exc:
         raise InputError(args.summary, f"not a posefix summary.json ({exc})") from None
     with timings.step("figure"):
-        write_figure(args.png, library_overview(entries, args.bar, title=f"posefix: {library}"))
-    atomic_write_bytes(args.html, summary_html(library, entries, args.bar, summary.get("failed", ())).encode())
+        write_figure(args.png, library_overview(entries, title=f"posefix: {library}"))
+    atomic_write_bytes(args.html, summary_html(library, entries, summary.get("failed", ())).encode())
     for entry in entries:
-        kind, reason = pose_status(entry, args.bar)
+        kind, reason = entry_status(entry)
         if kind != "ok":
             log.info("%s: %s (%s)", entry["pose"], kind, reason)
 

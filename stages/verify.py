@@ -50,15 +50,23 @@ def build_parser():
     parser.add_argument("--finish", choices=["contact", "snap"], default=defaults.finish,
                         help="contact: the contact solver moves V_C onto its targets, no new intersection can form; "
                         "snap: snap V_C, fall back to the target and untangle")
-    parser.add_argument("--free-goal", choices=["blend", "target", "integrated"], default=finish.free_goal,
-                        help="contact finish: goal of the free region: blend (the target's positions with the "
-                        "integrated pose's shape below the smoothing length), target, or integrated (the integrated "
-                        "pose plus the blended V_C residual)")
+    parser.add_argument("--free-goal", choices=["elastic", "blend", "target", "integrated"], default=finish.free_goal,
+                        help="contact finish: what moves the free region: elastic (a discrete shell and face areas with the "
+                        "target's shape as rest state, pulled toward the target), or a positional goal: blend (the target's "
+                        "positions with the integrated pose's shape below the smoothing length), target, or integrated "
+                        "(the integrated pose plus the blended V_C residual)")
     parser.add_argument("--constrained-weight", type=float, default=finish.constrained_weight,
                         help="contact finish: weight of V_C on its targets relative to the free region's")
     parser.add_argument("--untangle-rings", type=int, default=finish.untangle_rings,
                         help="contact finish: most rings (0, 1, 2, 4, ...) around the reference's own intersections "
                         "that the target has undone, put onto the target")
+    parser.add_argument("--elastic-weight", type=float, default=finish.elastic_weight,
+                        help="elastic finish: weight of the free region's pull toward the target (the elastic energy's is 1)")
+    parser.add_argument("--bending", type=float, default=finish.bending,
+                        help="elastic finish: bending stiffness k_b of the shell (stretching's and areas' are 1)")
+    parser.add_argument("--distortion-limit", type=float, default=finish.distortion_limit,
+                        help="elastic finish: the rest state's edge lengths and face areas are the target's within this "
+                        "ratio of the reference's (config summary.distortion_limit)")
     parser.add_argument("--fallback-eps", type=float, default=defaults.fallback_eps,
                         help="vertices farther than this many eps from their targets have not reached them")
     parser.add_argument("--fallback-fit", type=float, default=defaults.fallback_fit,
@@ -80,7 +88,7 @@ def build_parser():
 def main(args, log):
     timings = Timings()
     with timings.step("read"):
-        kf, kattrs = read_artifact(args.keyframes, "keyframes", ["reference", "target", "faces"])
+        kf, kattrs = read_artifact(args.keyframes, "keyframes", ["reference", "target", "faces", "frames"])
         cl, _ = read_artifact(args.classify, "classify", ["mask", "pairs", "pair_offsets"])
         it, _ = read_artifact(args.integrate, "integrate", ["positions", "samples"])
         _, fattrs = read_artifact(args.fit, "fit", [])
@@ -88,7 +96,7 @@ def main(args, log):
                                   split_frames(cl["pairs"], cl["pair_offsets"]))
     settings = RepairSettings(args.finish, args.fallback_eps, args.fallback_fit, args.ring, args.max_rings,
                               args.repair_new, args.reproduce)
-    result, params = _finish(args, problem, it, fattrs, settings)
+    result, params = _finish(args, problem, (it, kf["frames"]), fattrs, settings)
     timings.update(result.seconds)
     _say_what_was_left(json.loads(kattrs["inputs"])[-1], result.metrics, log)
     write_artifact(
@@ -117,7 +125,9 @@ def _say_what_was_left(target, metrics, log):
 
 
 def _finish(args, problem, integrated, fit_attrs, settings):
-    """(RepairResult, params) of the finish ``settings.finish`` of the integrated pose."""
+    """(RepairResult, params) of the finish ``settings.finish`` of the integrated pose; ``integrated``: (integrate.h5's
+    arrays, the key frames (K, n, 3))."""
+    integrated, frames = integrated
     d = float(fit_attrs["metrics"]["bbox_diagonal"])
     if settings.finish == "snap":
         eps = json.loads(fit_attrs["config"])["eps_rel"] * d
@@ -125,9 +135,10 @@ def _finish(args, problem, integrated, fit_attrs, settings):
                              settings)
         return result, asdict(settings)
     contact, contact_params = contact_settings(args)
-    finish = FinishSettings(args.free_goal, args.constrained_weight, args.untangle_rings)
+    finish = FinishSettings(args.free_goal, args.constrained_weight, args.untangle_rings, args.elastic_weight,
+                            args.bending, args.distortion_limit)
     solver = ContactSolver(problem.V_ref, problem.F, problem.reference_faces, contact, args.threads)
-    result = finish_pose(problem, integrated["samples"], d, solver, finish)
+    result = finish_pose(problem, integrated["samples"], d, solver, finish, frames)
     return result, {"finish": "contact"} | asdict(finish) | contact_params
 
 

@@ -19,7 +19,7 @@ from posefix.io.errors import InputError
 from posefix.io.files import atomic_write_bytes
 from posefix.mesh.intersections import intersecting_faces, self_intersecting_pairs
 from posefix.report.contents import VIEWER_FILES
-from posefix.report.tables import DEVIATION_BAR, baseline_names, pose_status
+from posefix.report.tables import baseline_names, entry_status
 from posefix.report.viewer import mesh_record, page_data, pose_record, viewer_html
 from posefix.spacetime.classification import split_frames
 from posefix.workflow.cli import run_stage, stage_parser
@@ -33,8 +33,6 @@ def build_parser():
     parser.add_argument("--summary", required=True, help="summary.json of the library (its poses and baselines)")
     parser.add_argument("--results", required=True, help="results/<library> folder (<pose>/*.h5)")
     parser.add_argument("--out", required=True, help="viewer.html to write")
-    parser.add_argument("--bar", type=float, default=DEVIATION_BAR,
-                        help="V_C max deviation / bbox diagonal above which a pose is flagged (its status)")
     return parser
 
 
@@ -84,7 +82,7 @@ def main(args, log):
         hit = kf["reference_hit"]
         meshes = [mesh_record("target", *target, hit, ("reference", reference[0]))]
         meshes += [mesh_record(name, X, faces, hit, ("target", target[0])) for name, (X, faces) in repairs.items()]
-        poses.append(pose_record(entry["pose"], pose_status(entry, args.bar), meshes, cl["mask"].astype(bool),
+        poses.append(pose_record(entry["pose"], entry_status(entry), meshes, cl["mask"].astype(bool),
                                  ve["replaced"], ve["deviation"]))
         log.info("%s: %s", entry["pose"], ", ".join(f"{m['name']} {m['faces']} faces ({m['new']} new)" for m in meshes))
     V, F, hit, diagonal = reference

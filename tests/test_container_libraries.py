@@ -11,7 +11,7 @@ from conftest import shared_library, snakemake
 from containers import library_into_containers, write_gltf, write_usd_blend_shapes, write_usd_frames
 from posefix.io.containers import open_container
 from posefix.io.meshes import read_mesh, write_mesh
-from posefix.report.tables import pose_status
+from posefix.report.tables import entry_status
 
 pytestmark = pytest.mark.pipeline
 
@@ -93,7 +93,7 @@ def summary_counts(run, name):
     on lion-08 and lion-09 the float32 the files hold moves it, 67 to 65 and 71 to 55 faces of 10k, when this was
     written.)"""
     summary = json.loads((run / "reports" / name / "summary.json").read_text())
-    return [(pose_status(e)[0], e["intersecting_faces"]) for e in summary["poses"]]
+    return [(entry_status(e)[0], e["intersecting_faces"]) for e in summary["poses"]]
 
 
 def test_the_summary_counts_the_same_for_a_container_and_its_obj_files(limb):

@@ -16,7 +16,7 @@ import yaml
 from conftest import ROOT
 from posefix.downstream.check import deform_towards, downstream_check
 from posefix.downstream.gauss_newton import SolverSettings
-from posefix.downstream.shells import shell_energy
+from posefix.mesh.shells import shell_energy
 from posefix.mesh.contact_solver import ContactSettings
 from posefix.mesh.contacts import contact_vertices
 from posefix.mesh.distortion import distortion_summary
@@ -75,9 +75,11 @@ LIBRARY = {
                           (OpenCLIntegrator.integrate, "h0", None)],
     ("integrate", "vec"): [(OpenCLIntegrator, "vec", lambda v: v or 0)],  # None and 0: the device's width
     **{("verify", f.name): [(RepairSettings, f.name, None)] for f in dataclasses.fields(RepairSettings)},
-    **{("verify", f.name): [(FinishSettings, f.name, None)] for f in dataclasses.fields(FinishSettings)},
+    **{("verify", f.name): [(FinishSettings, f.name, None)] for f in dataclasses.fields(FinishSettings)
+       if f.name != "distortion_limit"},
     **{("contact", f.name): [(ContactSettings, f.name, None)] for f in dataclasses.fields(ContactSettings)},
-    ("summary", "distortion_limit"): [(distortion_summary, "limit", None)],
+    ("summary", "distortion_limit"): [(distortion_summary, "limit", None),
+                                      (FinishSettings, "distortion_limit", None)],
     ("downstream", "alphas"): [(downstream_check, "alphas", list)],
     ("downstream", "k_bend"): [(downstream_check, "k_bend", list)],
     ("downstream", "k_stretch"): [(downstream_check, "k_stretch", None), (deform_towards, "k_stretch", None),
@@ -137,7 +139,7 @@ WORKFLOW_ONLY = {("demo", "folder"), ("classify", "exclude"), ("integrate", "dev
 repair_volumetric.tet_vertices goes to stage tet_mesh (its library default is checked in LIBRARY)."""
 
 
-SECTION_STAGES = {"contact": ["verify", "repair_contact"], "summary": ["summary", "render"]}
+SECTION_STAGES = {"contact": ["verify", "repair_contact"], "summary": ["summary", "render", "verify"]}
 """Config sections read by other stages than the one of their name."""
 
 

@@ -6,7 +6,7 @@ import pytest
 from conftest import icosphere
 from posefix.downstream.check import deform_towards, handle_vertices
 from posefix.downstream.gauss_newton import STOP_REASONS, SolverSettings, gauss_newton, unknowns
-from posefix.downstream.shells import dihedral_angles, mesh_hinges, shell_energy
+from posefix.mesh.shells import dihedral_angles, mesh_hinges, shell_energy
 
 
 def test_zero_energy_and_no_iteration_when_the_example_is_the_reference():

@@ -6,7 +6,7 @@ from posefix.report.tables import pose_status, summary_html
 
 
 def _entry(pose, new=0, inside=0, vc_max=1e-3, fallback=0, pass_through=0):
-    return {"pose": pose, "intersecting_faces": {"reference": 0, "target": 50, "keyframes_max": 50, "repaired": new,
+    entry = {"pose": pose, "faces": 10000, "intersecting_faces": {"reference": 0, "target": 50, "keyframes_max": 50, "repaired": new,
                                                   "repaired_new": new, "repaired_new_in_fallback": inside},
             "constraint_vertices": 10, "deviation": {"constrained_mean": 1e-4, "constrained_max": vc_max,
                                                       "free_mean": 1e-2, "free_max": 5e-2},
@@ -14,6 +14,8 @@ def _entry(pose, new=0, inside=0, vc_max=1e-3, fallback=0, pass_through=0):
             "integrate": {"seconds": 1.0}, "fallback_vertices": fallback,
             "fallback": {"pass_through": pass_through, "new_intersection": fallback - pass_through},
             "seconds_total": 9.0, "seconds_stages": {"fit": 5.0, "integrate": 1.0}}
+    kind, reason = pose_status(entry)
+    return entry | {"status": {"kind": kind, "reason": reason}}
 
 
 def test_pose_status_flags_what_needs_a_look():
@@ -21,12 +23,36 @@ def test_pose_status_flags_what_needs_a_look():
     assert pose_status(_entry("b", new=4, inside=4, fallback=30, pass_through=30))[0] == "fallback"
     kind, reason = pose_status(_entry("c", new=6, inside=4))
     assert kind == "check" and "2 new intersecting faces" in reason
-    kind, reason = pose_status(_entry("d", vc_max=8e-3))
+    kind, reason = pose_status(_entry("d", vc_max=1.5e-3))
     assert kind == "check" and "V_C max deviation" in reason
-    stretched = {**_entry("e"), "distortion": {"edge_target": 11.9, "area_target": 5.0, "edge_reference": 11.0,
-                                               "area_reference": 4.5, "faces_over": 38, "limit": 4.0}}
-    kind, reason = pose_status(stretched)  # no new intersection, yet not ok
-    assert kind == "check" and reason == "38 faces stretched or crushed beyond 4x"
+
+
+def test_the_status_flags_severe_or_widespread_distortion_and_not_one_crushed_face():
+    def distorted(over, severe):
+        return {**_entry("e"), "distortion": {"edge_target": 11.9, "area_target": 5.0, "edge_reference": 11.0,
+                                              "area_reference": 4.5, "faces_over": over, "faces_severe": severe,
+                                              "limit": 4.0}}
+    assert pose_status(distorted(10, 0)) == ("ok", "")  # 0.1% of 10,000 faces: noise
+    kind, reason = pose_status(distorted(11, 0))  # no new intersection, yet not ok
+    assert kind == "check" and reason == "11 faces (0.11%) stretched or crushed beyond 4x"
+    assert pose_status(distorted(1, 1)) == ("check", "1 faces stretched or crushed beyond 10x")
+
+
+def test_a_contact_finish_that_fell_back_or_did_not_converge_is_never_ok():
+    entry = _entry("f")
+    assert pose_status(entry | {"finish": {"converged": True, "reverted": False}}) == ("ok", "")
+    kind, reason = pose_status(entry | {"finish": {"converged": True, "reverted": True}})
+    assert kind == "check" and "fell back to the path lines" in reason
+    assert pose_status(entry | {"finish": {"converged": False, "reverted": False}}) == (
+        "check", "the contact finish did not converge")
+
+
+def test_the_page_reads_the_stored_status():
+    page = summary_html("lib", [_entry("a") | {"status": {"kind": "check", "reason": "stored"}}])
+    assert "check: stored" in page and "0 ok, 0 fallback, 1 check" in page
+
+
+def test_summary_page_and_figure():
     page = summary_html("lib <x>", [_entry("a"), _entry("c", new=6, inside=4)])
     assert page.count("<tr style=") == 2 and "lib &lt;x&gt;" in page and "1 ok, 0 fallback, 1 check" in page
     assert "<a href='viewer.html'>3D viewer</a>" in page

@@ -61,7 +61,7 @@ def _three_spheres(b_centre):
 def _entry(pose, baselines):
     faces = {"target": 1, "keyframes_max": 1, "repaired": 0, "repaired_new": 0, "repaired_new_in_fallback": 0}
     return {"pose": pose, "intersecting_faces": faces, "deviation": {"constrained_max": 0.0}, "fallback_vertices": 0,
-            "baselines": {name: {} for name in baselines}}
+            "baselines": {name: {} for name in baselines}, "status": {"kind": "ok", "reason": ""}}
 
 
 @pytest.fixture(scope="module")

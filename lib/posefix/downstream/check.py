@@ -16,7 +16,7 @@ import numpy as np
 from threadpoolctl import threadpool_limits
 
 from posefix.downstream.gauss_newton import STOP_REASONS, gauss_newton
-from posefix.downstream.shells import mesh_hinges, shell_energy
+from posefix.mesh.shells import mesh_hinges, shell_energy
 
 log = logging.getLogger(__name__)
 
@@ -48,7 +48,7 @@ def deform_towards(V_ref, F, V_example, alpha, k_bend, k_stretch=1.0, settings=N
 
     Starts from the reference with three far-apart vertices (:func:`handle_vertices`) pinned at their linear
     blend ``(1 - alpha) V_ref + alpha V_example`` and runs :func:`gauss_newton` on :func:`shell_energy`
-    (``hinges``: :func:`posefix.downstream.shells.mesh_hinges` of ``F``, when already built). Returns its
+    (``hinges``: :func:`posefix.mesh.shells.mesh_hinges` of ``F``, when already built). Returns its
     :class:`SolveResult`.
     """
     h = handle_vertices(V_ref)

@@ -1,6 +1,6 @@
 """Gauss–Newton with step halving for sums of squared residuals with a sparse Jacobian.
 
-The energy is a :class:`posefix.downstream.shells.ShellEnergy` (residuals and Jacobian of discrete shells).
+The energy is a :class:`posefix.mesh.shells.ShellEnergy` (residuals and Jacobian of discrete shells).
 """
 
 import logging

@@ -393,8 +393,8 @@ class ContactSolver:
             ``start`` has two non-tolerated primitives in contact (distance 0): it is not intersection-free.
         """
         t0 = time.perf_counter()
-        newton = _Newton(self, np.asarray(goal, dtype=np.float64), np.asarray(weights, dtype=np.float64),
-                         self.settings.tolerance if tolerance is None else tolerance)
+        newton = _GoalNewton(self, np.asarray(goal, dtype=np.float64), np.asarray(weights, dtype=np.float64),
+                             self.settings.tolerance if tolerance is None else tolerance)
         if shape is not None:  # 1/2 |x - g|_W^2 + 1/2 |x - s|_S^2 = 1/2 |x - Q^-1 (W g + S s)|_Q^2 + const
             mass, smooth = self._smoothness
             newton.goal = newton.system.solve_q((weights * mass)[:, None] * newton.goal + smooth @ shape)
@@ -403,8 +403,43 @@ class ContactSolver:
         return ContactResult(X, converged, iterations, self.contact_vertices(C, len(X)), self.min_distance(X, C),
                              time.perf_counter() - t0)
 
-    def compute_path(self, start, waypoints, tolerance=None):
-        """Carry ``start`` through ``waypoints`` in turn (uniform weights), each from where the last one stopped.
+    def compute_elastic(self, start, goal, weights, elastic, pinned=None):
+        """Move ``start`` toward ``goal`` under an elastic energy without leaving the intersection-free set.
+
+        Minimizes ``1/2 sum_i w_i a_i |x_i - g_i|^2 + 1/2 l^2 r(x) . r(x) + kappa B(x)`` over the vertices not
+        ``pinned`` (they stay where ``start`` has them): ``r`` the residuals of ``elastic`` (dimensionless: the
+        discrete shell's stretching and bending, face areas), ``l`` the reference's mean edge length, ``a`` vertex
+        areas over their mean. The elastic energy is invariant to rigid motion, so a part that turns keeps its shape;
+        the goal term pulls the whole toward ``goal``. Projected Newton: Gauss-Newton's Hessian ``l^2 J^T J`` of the
+        elastic terms and the barrier's PSD-projected one, factorized at every step; every step bounded by CCD.
+
+        Parameters
+        ----------
+        start : (n, 3) float
+            Intersection-free positions (see :meth:`compute_pose`).
+        goal : (n, 3) float
+        weights : (n,) float
+            Per-vertex weights of the goals (the free region's small: the elastic energy keeps its shape).
+        elastic : posefix.mesh.shells.ElasticEnergy
+            Residuals and their Jacobian with a rest state (:func:`posefix.mesh.shells.rest_elastic_energy`).
+        pinned : (n,) bool, optional
+            Vertices that do not move (none by default).
+
+        Returns
+        -------
+        ContactResult
+        """
+        t0 = time.perf_counter()
+        pinned = np.zeros(len(start), dtype=bool) if pinned is None else np.asarray(pinned, dtype=bool)
+        newton = _ElasticNewton(self, np.asarray(goal, dtype=np.float64), np.asarray(weights, dtype=np.float64),
+                                elastic, pinned, self.settings.tolerance)
+        X, converged, iterations = newton.run(np.array(start, dtype=np.float64))
+        C = self.collisions(X)
+        return ContactResult(X, converged, iterations, self.contact_vertices(C, len(X)), self.min_distance(X, C),
+                             time.perf_counter() - t0)
+
+    def compute_path(self, start, waypoints, tolerance=None, weights=None):
+        """Carry ``start`` through ``waypoints`` in turn, each from where the last one stopped.
 
         Parameters
         ----------
@@ -414,17 +449,20 @@ class ContactSolver:
             The poses to follow, K >= 1; all but the last are solved to :data:`WAYPOINT_TOLERANCE` only.
         tolerance : float, optional
             Newton's stopping step / d on the last waypoint (``settings.tolerance`` by default).
+        weights : (n,) float, optional
+            Per-vertex weights of the waypoints (uniform by default).
 
         Returns
         -------
         ContactResult
             At the last waypoint; ``iterations`` and ``seconds`` of the whole path, ``converged`` of every step.
         """
-        X, uniform = np.asarray(start, dtype=np.float64), np.ones(len(start))
+        X = np.asarray(start, dtype=np.float64)
+        weights = np.ones(len(start)) if weights is None else np.asarray(weights, dtype=np.float64)
         iterations, converged, seconds = 0, True, 0.0
         for k, goal in enumerate(waypoints):
             last = k == len(waypoints) - 1
-            result = self.compute_pose(X, goal, uniform, tolerance if last else WAYPOINT_TOLERANCE)
+            result = self.compute_pose(X, goal, weights, tolerance if last else WAYPOINT_TOLERANCE)
             X, iterations, seconds = result.X, iterations + result.iterations, seconds + result.seconds
             converged &= result.converged
             log.debug("waypoint %d of %d: %d Newton iterations", k + 1, len(waypoints), result.iterations)
@@ -520,22 +558,13 @@ class _NewtonSystem:
 
 
 class _Newton:
-    """Newton's method with the barrier and a CCD-bounded backtracking line search for one pose."""
+    """Newton's method with the barrier and a CCD-bounded backtracking line search for one pose; the energy
+    without the barrier (:meth:`energy`, its gradient and Hessian) is a subclass's."""
 
-    def __init__(self, solver, goal, weights, tolerance):
+    def __init__(self, solver, goal, tolerance):
         self.s, self.goal, self.tolerance = solver, goal, tolerance
-        key = weights.tobytes()
-        if solver._system[0] != key:  # the factorization of Q serves every pose with the same weights
-            mass, smooth = solver._smoothness
-            solver._system = key, _NewtonSystem(sp.diags(weights * mass) + smooth, solver._order)
-        self.system = solver._system[1]
-        self.H0 = sp.kron(self.system.Q, sp.identity(3), format="csr")
         self.kappa = None
         self.kappa_max = None
-
-    def energy(self, X, C):
-        u = (X - self.goal).ravel()
-        return 0.5 * u @ (self.H0 @ u) + self.kappa * self.s.barrier_terms(C, X)
 
     def run(self, X):
         s = self.s
@@ -562,22 +591,14 @@ class _Newton:
         return X, False, s.settings.max_iterations
 
     def _init_stiffness(self, X, C):
-        """IPC's initial barrier stiffness and its cap. IPC's "average mass" is taken as the smallest diagonal
-        entry of the goal term's Hessian with unit weights: V_C's weight is a penalty, not a mass, and the mean
-        (dominated by it and by the smoothness of fine regions) made the barrier so stiff that CCD cut almost
-        every step (lion-04: 175 Newton iterations against 63)."""
+        """IPC's initial barrier stiffness and its cap, from the gradients at ``X`` and :meth:`_mass`."""
         s = self.s
-        grad_energy = self.H0 @ (X - self.goal).ravel()
-        grad_barrier = s.barrier_terms(C, X, 1)
-        mass, smooth = s._smoothness
-        mass = float((mass + smooth.diagonal()).min())
-        self.kappa, self.kappa_max = ipctk.initial_barrier_stiffness(s.d, s.barrier.barrier, s.dhat, mass,
-                                                                     grad_energy, grad_barrier)
+        self.kappa, self.kappa_max = ipctk.initial_barrier_stiffness(
+            s.d, s.barrier.barrier, s.dhat, self._mass(), self.gradient(X), self._unknowns(s.barrier_terms(C, X, 1)))
 
-    def _direction(self, X, C):
-        s = self.s
-        grad = self.H0 @ (X - self.goal).ravel() + self.kappa * s.barrier_terms(C, X, 1)
-        return self.system.solve(-grad.reshape(-1, 3), self.kappa * s.barrier_terms(C, X, 2))
+    def _unknowns(self, g):
+        """A gradient (3n,) with the entries of the vertices that do not move zeroed (none here)."""
+        return g
 
     def _line_search(self, X, dx, C):
         """``(X, collisions, accepted)`` after the largest step ``alpha dx`` that CCD allows and that lowers the
@@ -587,11 +608,94 @@ class _Newton:
         intersection-free, the pairs closer than ``dhat`` at its end are those the barrier sees)."""
         s = self.s
         alpha = s.collision_free_step(X, X + dx)
-        e0 = self.energy(X, C)
+        e0 = self.energy(X) + self.kappa * s.barrier_terms(C, X)
         while alpha > ROUNDOFF:
             X_new = X + alpha * dx
             C_new = s.collisions(X_new)
-            if self.energy(X_new, C_new) <= e0:
+            if self.energy(X_new) + self.kappa * s.barrier_terms(C_new, X_new) <= e0:
                 return X_new, C_new, True
             alpha *= 0.5
         return X, C, False
+
+
+class _GoalNewton(_Newton):
+    """The quadratic goal and smoothness energy ``1/2 (x - g)^T H0 (x - g)`` (module docstring)."""
+
+    def __init__(self, solver, goal, weights, tolerance):
+        super().__init__(solver, goal, tolerance)
+        key = weights.tobytes()
+        if solver._system[0] != key:  # the factorization of Q serves every pose with the same weights
+            mass, smooth = solver._smoothness
+            solver._system = key, _NewtonSystem(sp.diags(weights * mass) + smooth, solver._order)
+        self.system = solver._system[1]
+        self.H0 = sp.kron(self.system.Q, sp.identity(3), format="csr")
+
+    def energy(self, X):
+        u = (X - self.goal).ravel()
+        return 0.5 * u @ (self.H0 @ u)
+
+    def gradient(self, X):
+        return self.H0 @ (X - self.goal).ravel()
+
+    def _mass(self):
+        """IPC's "average mass", taken as the smallest diagonal entry of the goal term's Hessian with unit weights:
+        V_C's weight is a penalty, not a mass, and the mean (dominated by it and by the smoothness of fine regions)
+        made the barrier so stiff that CCD cut almost every step (lion-04: 175 Newton iterations against 63)."""
+        mass, smooth = self.s._smoothness
+        return float((mass + smooth.diagonal()).min())
+
+    def _direction(self, X, C):
+        s = self.s
+        grad = self.gradient(X) + self.kappa * s.barrier_terms(C, X, 1)
+        return self.system.solve(-grad.reshape(-1, 3), self.kappa * s.barrier_terms(C, X, 2))
+
+
+class _ElasticNewton(_Newton):
+    """The elastic energy ``1/2 sum_i w_i a_i |x_i - g_i|^2 + 1/2 l^2 r(x) . r(x)`` (:meth:`ContactSolver.compute_elastic`)
+    over the vertices not ``pinned``; its Hessian, Gauss-Newton's ``l^2 J^T J`` for the elastic terms (PSD), is
+    factorized at every step."""
+
+    def __init__(self, solver, goal, weights, elastic, pinned, tolerance):
+        super().__init__(solver, goal, tolerance)
+        self.elastic, self.scale = elastic, solver.edge_length ** 2
+        self.goal_weights = weights * solver._smoothness[0]
+        self.dofs = (3 * np.flatnonzero(~pinned)[:, None] + np.arange(3)).ravel()
+
+    def energy(self, X):
+        r = self.elastic.residuals(X)
+        return 0.5 * float(self.goal_weights @ ((X - self.goal) ** 2).sum(axis=1)) + 0.5 * self.scale * float(r @ r)
+
+    def gradient(self, X):
+        """The energy's gradient, (3n,), zero at the pinned vertices."""
+        grad = (self.goal_weights[:, None] * (X - self.goal)).ravel()
+        grad += self.scale * (self.elastic.jacobian(X).T @ self.elastic.residuals(X))
+        return self._unknowns(grad)
+
+    def _unknowns(self, g):
+        out = np.zeros_like(g)
+        out[self.dofs] = g[self.dofs]
+        return out
+
+    def _mass(self):
+        """IPC's "average mass": the median diagonal entry of the energy's Hessian at the goal over the free unknowns,
+        with the lightest goal weight everywhere (V_C's weight is a penalty, not a mass: with it the barrier was
+        stiffer by 1e4 and the steps a thousandth of Newton's)."""
+        J = sp.csc_matrix(self.elastic.jacobian(self.goal))[:, self.dofs]
+        lightest = np.repeat(self.goal_weights.min() * np.ones(len(self.goal)), 3)[self.dofs]
+        return float(np.median(lightest + self.scale * np.asarray(J.multiply(J).sum(axis=0)).ravel()))
+
+    def _hessian(self, X):
+        J = sp.csc_matrix(self.elastic.jacobian(X))[:, self.dofs]
+        weights = np.repeat(self.goal_weights, 3)[self.dofs]
+        return sp.diags(weights) + self.scale * (J.T @ J)
+
+    def _direction(self, X, C):
+        s = self.s
+        grad = self.gradient(X) + self.kappa * s.barrier_terms(C, X, 1)
+        H = self._hessian(X)
+        Hb = s.barrier_terms(C, X, 2)
+        if sp.issparse(Hb) and Hb.nnz:
+            H = H + self.kappa * sp.csr_matrix(Hb)[self.dofs][:, self.dofs]
+        dx = np.zeros(X.size)
+        dx[self.dofs] = cholesky_factorized(H).solve(-grad[self.dofs])
+        return dx.reshape(-1, 3)

@@ -8,6 +8,9 @@ import numpy as np
 
 from posefix.mesh.geometry import face_areas
 
+SEVERE = 10.0
+"""Ratio beyond which a face is severely distorted (:func:`distortion_summary`'s ``faces_severe``)."""
+
 
 def _symmetric_ratio(a, b):
     """``max(a/b, b/a)`` elementwise for non-negative ``a``, ``b``: 1 where both are 0, inf where one is."""
@@ -67,7 +70,7 @@ def distorted_faces(X, rests, F, limit):
     return over
 
 
-def distortion_summary(X, rests, F, limit=4.0):
+def distortion_summary(X, rests, F, limit=4.0, severe=SEVERE):
     """Worst ratios of ``X`` against each rest shape and the faces over ``limit`` against all of them.
 
     Parameters
@@ -78,16 +81,19 @@ def distortion_summary(X, rests, F, limit=4.0):
     F : (m, 3) int
     limit : float
         Largest tolerated ratio (pipeline: config ``summary.distortion_limit``).
+    severe : float
+        Ratio of a severe distortion.
 
     Returns
     -------
     dict
-        ``edge_<name>`` and ``area_<name>``: the worst ratio against each; ``faces_over``: faces beyond ``limit``
-        against every rest shape (:func:`distorted_faces`); ``limit``.
+        ``edge_<name>`` and ``area_<name>``: the worst ratio against each; ``faces_over`` and ``faces_severe``:
+        faces beyond ``limit`` and beyond ``severe`` against every rest shape (:func:`distorted_faces`); ``limit``.
     """
     out = {}
     for name, V in rests.items():
         edge, area = face_distortion(X, V, F)
         out[f"edge_{name}"], out[f"area_{name}"] = float(edge.max(initial=1.0)), float(area.max(initial=1.0))
     out["faces_over"] = int(distorted_faces(X, list(rests.values()), F, limit).sum())
+    out["faces_severe"] = int(distorted_faces(X, list(rests.values()), F, severe).sum())
     return out | {"limit": float(limit)}

@@ -14,7 +14,7 @@ from matplotlib.patches import Patch
 from posefix.verify.flags import (CONTACT, FLAGS, PUSHED, REPLACED_NEW_INTERSECTION, REPLACED_PASS_THROUGH,
                                   RIGID_REFERENCE, SEPARATED, SMOOTHED)
 from posefix.report.rasterizer import DISTORTED, HIGHLIGHT, SECONDARY, draw_mesh, face_values, heat_colors, view_limits
-from posefix.report.tables import baseline_names, converged_runs, downstream_counts
+from posefix.report.tables import DEVIATION_BAR, baseline_names, converged_runs, downstream_counts
 
 DPI = 110
 FLAG_COLORS = {REPLACED_PASS_THROUGH: "tab:red", REPLACED_NEW_INTERSECTION: "tab:orange", SMOOTHED: "tab:green",
@@ -330,7 +330,7 @@ def _downstream_panels(fig, x, entries, names):
     ax.legend(fontsize=8)
 
 
-def library_overview(entries, bar=5e-3, title=""):
+def library_overview(entries, bar=DEVIATION_BAR, title=""):
     """All poses of a library at a glance: intersections, deviation, centres, seconds, and the
     downstream Gauss–Newton check (converged runs, iterations) when the entries have it; the
     baseline repairs (``summary.json``'s ``baselines``) beside S0's.

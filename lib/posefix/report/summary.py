@@ -8,7 +8,7 @@ import numpy as np
 
 from posefix.downstream.check import EXAMPLES
 from posefix.downstream.gauss_newton import STOP_REASONS
-from posefix.report.tables import comparison_markdown, downstream_markdown
+from posefix.report.tables import comparison_markdown, downstream_markdown, pose_status
 
 DEVIATIONS = ("constrained_max", "constrained_mean", "constrained_p95", "free_max", "free_mean", "free_p95")
 """Deviation summaries of a pose (relative to the bbox diagonal)."""
@@ -38,9 +38,10 @@ def pose_entry(pose, metrics, downstream, seconds, baselines=None, distortion=No
     Returns
     -------
     dict
+        With its ``status`` (:func:`posefix.report.tables.pose_status`), which every page and the terminal read.
     """
     kf, co, fi, it, ve = (metrics[s] for s in ("keyframes", "constraints", "fit", "integrate", "verify"))
-    return {
+    entry = _finish_entry(ve) | {
         "pose": pose, "vertices": int(kf["vertices"]), "faces": int(kf["faces"]), "keyframes": int(kf["keyframes"]),
         "intersecting_faces": {
             "reference": int(ve["intersecting_faces_reference"]), "target": int(ve["intersecting_faces_target"]),
@@ -62,9 +63,17 @@ def pose_entry(pose, metrics, downstream, seconds, baselines=None, distortion=No
         "downstream": downstream_entry(downstream),
         **({"distortion": distortion} if distortion else {}),
         **({"baselines": baselines} if baselines else {}),
-        "seconds_stages": seconds,
-        "seconds_total": sum(v for v in seconds.values() if v is not None),
-    }
+        "seconds_stages": seconds, "seconds_total": sum(v for v in seconds.values() if v is not None)}
+    return entry | {"status": dict(zip(("kind", "reason"), pose_status(entry)))}
+
+
+def _finish_entry(verify):
+    """``{"finish": {"converged", "reverted", "start"}}`` of the contact finish from verify's metrics; ``{}`` for
+    the snap finish."""
+    if "contact_converged" not in verify:
+        return {}
+    return {"finish": {"converged": bool(verify["contact_converged"]), "reverted": bool(verify["contact_reverted"]),
+                       "start": str(verify.get("contact_start", "integrated"))}}
 
 
 def baseline_entry(name, metrics, deviation, downstream, distortion=None):

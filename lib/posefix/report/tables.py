@@ -2,31 +2,40 @@
 
 import html
 
+from posefix.mesh.distortion import SEVERE
 from posefix.report.contents import TIMED_STAGES
 
-DEVIATION_BAR = 5e-3
-"""Constrained-region max deviation / d above which a pose is flagged (issue 4's acceptance bar)."""
+DEVIATION_BAR = 1e-3
+"""Constrained-region max deviation / d above which a pose is flagged."""
+DISTORTED_SHARE = 1e-3
+"""Share of the faces beyond the distortion limit above which a pose is flagged (one crushed face of 10,000 is
+noise)."""
 STATUS_COLORS = {"ok": "#d8f0d8", "fallback": "#fff2c6", "check": "#f8d0d0"}
 
 
-def pose_status(entry, bar=DEVIATION_BAR):
-    """Status of one pose: ``(kind, reason)`` with kind ``ok``, ``fallback`` or ``check``.
+def pose_status(entry):
+    """Status of one pose from its summary entry: ``(kind, reason)`` with kind ``ok``, ``fallback`` or ``check``.
 
-    ``check``: new intersecting faces outside the pass-through fallback, a constrained-region
-    max deviation above ``bar``, or faces stretched or crushed beyond the entry's distortion limit
-    (:func:`posefix.mesh.distortion.distortion_summary`, against both the target and the reference); ``fallback``: regions copied from the target or untangled (the
-    pose is clean but not all of it came from the integration); ``ok`` otherwise.
+    The summary stage stores it in the entry (``status``, :func:`entry_status` reads it); ``check``: new
+    intersecting faces outside the pass-through fallback, a constrained-region max deviation above
+    :data:`DEVIATION_BAR`, a contact finish reverted to the path lines or not converged, a face stretched or crushed
+    beyond :data:`posefix.mesh.distortion.SEVERE` or more than :data:`DISTORTED_SHARE` of the faces beyond the
+    entry's distortion limit (against both the target and the reference); ``fallback``: regions copied from the
+    target or untangled (the pose is clean but not all of it came from the integration); ``ok`` otherwise.
     """
     faces = entry["intersecting_faces"]
     outside = faces["repaired_new"] - faces.get("repaired_new_in_fallback", 0)
     reasons = []
     if outside > 0:
         reasons.append(f"{outside} new intersecting faces")
-    if entry["deviation"]["constrained_max"] > bar:
-        reasons.append(f"V_C max deviation {entry['deviation']['constrained_max']:.2g} > {bar:g}")
-    distortion = entry.get("distortion", {})
-    if distortion.get("faces_over", 0) > 0:
-        reasons.append(f"{distortion['faces_over']} faces stretched or crushed beyond {distortion['limit']:g}x")
+    if entry["deviation"]["constrained_max"] > DEVIATION_BAR:
+        reasons.append(f"V_C max deviation {entry['deviation']['constrained_max']:.2g} > {DEVIATION_BAR:g}")
+    finish = entry.get("finish", {})
+    if finish.get("reverted"):
+        reasons.append("the contact finish fell back to the path lines (a step it could not bound)")
+    elif finish and not finish.get("converged", True):
+        reasons.append("the contact finish did not converge")
+    reasons += _distortion_reasons(entry)
     if reasons:
         return "check", "; ".join(reasons)
     fallback = entry.get("fallback", {})
@@ -35,6 +44,24 @@ def pose_status(entry, bar=DEVIATION_BAR):
                  if fallback.get(k, 0)]
         return "fallback", f"{entry['fallback_vertices']} vertices ({', '.join(parts) or 'untangled'})"
     return "ok", ""
+
+
+def _distortion_reasons(entry):
+    """The distortion part of :func:`pose_status`'s reasons, list of str."""
+    distortion = entry.get("distortion", {})
+    reasons = []
+    if distortion.get("faces_severe", 0) > 0:
+        reasons.append(f"{distortion['faces_severe']} faces stretched or crushed beyond {SEVERE:g}x")
+    over = distortion.get("faces_over", 0)
+    if over > DISTORTED_SHARE * entry["faces"]:
+        reasons.append(f"{over} faces ({100 * over / entry['faces']:.2g}%) stretched or crushed beyond "
+                       f"{distortion['limit']:g}x")
+    return reasons
+
+
+def entry_status(entry):
+    """``(kind, reason)`` of a summary entry as the summary stage stored it (:func:`pose_status`)."""
+    return entry["status"]["kind"], entry["status"]["reason"]
 
 
 def downstream_counts(entry):
@@ -238,13 +265,14 @@ def _failed_html(failed):
             f"the others):</p><ul>{items}</ul>")
 
 
-def summary_html(library, entries, bar=DEVIATION_BAR, failed=()):
-    """A self-contained HTML page with the library's table, rows coloured by :func:`pose_status`, str; ``failed``:
+def summary_html(library, entries, failed=()):
+    """A self-contained HTML page with the library's table, rows coloured by their status (:func:`entry_status`),
+    str; ``failed``:
     ``{"pose", "error"}`` of the poses that did not finish, listed above the table."""
     counts = {}
     rows = []
     for entry in entries:
-        kind, reason = pose_status(entry, bar)
+        kind, reason = entry_status(entry)
         counts[kind] = counts.get(kind, 0) + 1
         cells = [html.escape(f"{kind}: {reason}" if reason else kind) if get is None else html.escape(str(get(entry)))
                  for _, get in COLUMNS]
@@ -259,8 +287,9 @@ def summary_html(library, entries, bar=DEVIATION_BAR, failed=()):
             "reference, intersecting faces, deviation heat map.</p>"
             f"<p>{len(entries)} poses: {tally}. ok: clean and within the deviation bar; fallback: clean, with "
             f"regions copied from the target or untangled; check: new intersecting faces outside the pass-through "
-            f"fallback, a V_C max deviation above {bar:g} of the bbox diagonal, or faces stretched or crushed beyond "
-            "the distortion limit against both the target and the reference (ratios against the target). Deviations "
-            "are relative to the reference's bbox diagonal.</p>"
+            f"fallback, a V_C max deviation above {DEVIATION_BAR:g} of the bbox diagonal, a contact finish that fell "
+            f"back or did not converge, a face stretched or crushed beyond {SEVERE:g}x or more than "
+            f"{100 * DISTORTED_SHARE:g}% of the faces beyond the distortion limit, against both the target and the "
+            "reference (ratios against the target). Deviations are relative to the reference's bbox diagonal.</p>"
             f"<table><thead><tr>{head}</tr></thead><tbody>{''.join(rows)}</tbody></table>"
             f"{_comparison_html(entries)}</body></html>\n")

@@ -5,15 +5,18 @@ toward its goal, through intersection-free shapes only (:mod:`posefix.mesh.conta
    reference; the exact detector). Where key frames pass through each other (S0 Fig. 9) it is not: then the
    start is the latest intersection-free sample of the integrated path lines, carried along the later
    samples by the contact solver, which holds the passing region on its intersection-free side.
-2. **Goal.** ``V_C`` on its targets; the free region toward the target's positions with the integrated
-   pose's shape (``free_goal: blend``, the default: the smoothness term keeps the displacement from the
-   integrated pose, plus the ``V_C`` residual blended biharmonically into it, smooth, so the free region
-   follows the target above the smoothing length and keeps the integrated pose's details below it: the
-   target's crushed and stretched faces are not copied), on the target alone (``target``: the closest
-   intersection-free shape to what the artist posed), or on the integrated pose plus the blended residual
-   (``integrated``).
-3. **Solve** with ``V_C`` weighted ``constrained_weight`` and the free region 1; the barrier keeps every
-   new contact open.
+2. **Goal.** ``V_C`` on its targets; the free region under an elastic energy (``free_goal: elastic``, the
+   default): a discrete shell (log-strain stretching, bending) and log face areas, invariant to rigid motion,
+   whose rest state is the target's edge lengths and face areas clipped to within ``distortion_limit`` of the
+   reference's, and its dihedral angles where its faces are within that limit (the reference's elsewhere), plus
+   a weak pull (``elastic_weight``) toward the target's positions. A part that turns keeps its shape, and a contact's push bends and slides the surface instead of
+   crushing it. ``V_C`` away from contacts is pinned on its targets (not an unknown) when CCD allows the move.
+   The positional goals stay for comparison: the target's positions with the integrated pose's shape
+   (``blend``: the smoothness term keeps the displacement from the integrated pose, plus the ``V_C`` residual
+   blended biharmonically into it), the target alone (``target``), or the integrated pose plus the blended
+   residual (``integrated``).
+3. **Solve** with ``V_C`` weighted ``constrained_weight`` and the free region ``elastic_weight`` (elastic) or 1
+   (positional); the barrier keeps every new contact open.
 4. **Exact V_C**: constrained vertices of no barrier pair are put exactly on their targets where CCD
    allows the (small) move. The constrained vertices of the reference's own intersecting faces (which the
    integrated pose inherits; the target may have undone them) are pulled with the free region's weight, as no
@@ -36,6 +39,7 @@ import numpy as np
 from posefix.mesh.contact_solver import WAYPOINT_TOLERANCE
 from posefix.mesh.harmonic import biharmonic_extension
 from posefix.mesh.intersections import intersecting_faces, self_intersecting_pairs
+from posefix.mesh.shells import rest_elastic_energy
 from posefix.mesh.topology import grow_rings
 
 log = logging.getLogger(__name__)
@@ -47,22 +51,51 @@ class FinishSettings:
     Attributes
     ----------
     free_goal : str
-        ``blend`` (the target's positions with the integrated pose's shape below the smoothing length),
-        ``target`` (the closest intersection-free shape to the pose) or ``integrated`` (the integrated free
-        region plus the blended V_C residual). On the cat poses ``target`` copies the target's crushed faces
-        where contacts press on them and the downstream Gauss-Newton check collapses them (cat-01, -02, -04);
-        ``blend`` keeps them open, in a third to two thirds of the Newton iterations, for up to twice the
-        free-region deviation (still below the snap finish's).
+        ``elastic`` (a discrete shell and face areas with the target's shape within ``distortion_limit`` of the
+        reference as rest state, pulled weakly toward the target's positions), or a positional goal: ``blend`` (the target's positions with the integrated pose's shape
+        below the smoothing length), ``target`` (the closest intersection-free shape to the pose) or
+        ``integrated`` (the integrated free region plus the blended V_C residual). The positional goals are not
+        invariant to rotation: where a part turns or a contact presses they crush and stretch faces (demo-01:
+        29 faces beyond 4x with ``blend``, 0 with ``elastic``).
     constrained_weight : float
         Weight of ``V_C`` on its targets, relative to the free region's 1.
     untangle_rings : int
         Most rings grown (0, 1, 2, 4, ...) around the reference's own intersections where the target has undone
         them: the region then takes the target's positions (cat-09: 7 rings).
+    elastic_weight : float
+        ``elastic``: weight of the free region's pull toward the target's positions (the elastic energy's is 1).
+    bending : float
+        ``elastic``: bending stiffness ``k_b`` of the shell (stretching's and areas' are 1).
+    distortion_limit : float
+        ``elastic``: the rest state's edge lengths and face areas are the target's clipped to within this ratio of
+        the reference's (config ``summary.distortion_limit``).
     """
 
-    free_goal: str = "blend"
+    free_goal: str = "elastic"
     constrained_weight: float = 1e6
     untangle_rings: int = 16
+    elastic_weight: float = 0.1
+    bending: float = 1e-3
+    distortion_limit: float = 4.0
+
+
+@dataclass(frozen=True)
+class _Motion:
+    """How the finish moves the free region: toward ``goal`` (n, 3), keeping ``shape`` (n, 3) or None (positional)
+    or under the ``elastic`` energy (an ElasticEnergy, or None), with the free region's weight ``free_weight``."""
+
+    goal: np.ndarray
+    shape: np.ndarray
+    elastic: object
+    free_weight: float
+
+    def solve(self, solver, start, heavy, weight, pinned):
+        """The contact solver's result from ``start`` with the vertices ``heavy`` (n,) bool weighted ``weight`` and the
+        others ``free_weight``; ``pinned`` (n,) bool stay where they are (elastic only, else None)."""
+        weights = np.where(heavy, weight, self.free_weight)
+        if self.elastic is None:
+            return solver.compute_pose(start, self.goal, weights, shape=self.shape)
+        return solver.compute_elastic(start, self.goal, weights, self.elastic, pinned)
 
 
 @dataclass
@@ -95,7 +128,7 @@ class FinishResult:
     pairs: np.ndarray
 
 
-def contact_finish(problem, solver, samples, settings=FinishSettings()):
+def contact_finish(problem, solver, samples, settings=FinishSettings(), frames=None):
     """Finish an integrated pose with the contact solver.
 
     Parameters
@@ -107,24 +140,26 @@ def contact_finish(problem, solver, samples, settings=FinishSettings()):
     samples : (S, n, 3) float
         The integrated path lines at their sample times, the reference first and the integrated pose last.
     settings : FinishSettings
+    frames : (K, n, 3) float, optional
+        The key frames, the reference first and the target last: the elastic finish tracks them for a second
+        candidate start (:func:`_lower_energy_start`).
 
     Returns
     -------
     FinishResult
     """
     t0 = time.perf_counter()
-    start, label, tracked, iterations = _intersection_free_start(problem, solver, samples)
-    goal, shape = _goal(problem, samples[-1], settings.free_goal)
-    locked = _locked_vertices(problem)
-    weights = np.where(problem.mask & ~locked, settings.constrained_weight, 1.0)
-    result = solver.compute_pose(start, goal, weights, shape=shape)
+    motion, locked = _motion(problem, samples[-1], settings), _locked_vertices(problem)
+    start, label, tracked, iterations, pinned = _start(problem, solver, (samples, frames), motion, locked,
+                                                       settings.constrained_weight)
+    result = motion.solve(solver, start, problem.mask & ~locked, settings.constrained_weight, pinned)
     X, exact = _exact_constrained(problem, solver, result.X, result.contact, locked)
     X, exact, untangled = _untangled(problem, X, exact, locked, settings.untangle_rings)
     if untangled.any():  # contacts with the untangled region have changed: V_C away from the new ones is exact
         result.contact = solver.contact_vertices(solver.collisions(X), len(X))
         X, exact = _exact_constrained(problem, solver, X, result.contact, locked & ~exact)
     if (locked & ~exact).any():
-        result, X, exact = _released(problem, solver, result, X, (goal, shape), settings.constrained_weight)
+        result, X, exact = _released(problem, solver, result, X, motion, settings.constrained_weight)
     pairs = self_intersecting_pairs(X, problem.F)
     reverted = bool((intersecting_faces(pairs, len(problem.F)) & ~problem.reference_faces).any())
     if reverted:
@@ -137,7 +172,7 @@ def contact_finish(problem, solver, samples, settings=FinishSettings()):
              "in contact", label, result.iterations, "converged" if result.converged else "not converged",
              exact.sum(), problem.mask.sum(), result.contact.sum())
     metrics = {"contact_iterations": result.iterations + iterations, "contact_converged": bool(result.converged),
-               "contact_samples_tracked": tracked, "contact_vertices": int(result.contact.sum()),
+               "contact_start": label, "contact_samples_tracked": tracked, "contact_vertices": int(result.contact.sum()),
                "contact_untangled": int(untangled.sum()), "contact_dhat_rel": solver.dhat / solver.d,
                "contact_reverted": reverted}
     return FinishResult(X, exact, result.contact, untangled, label,
@@ -165,15 +200,58 @@ def _intersection_free_start(problem, solver, samples):
     return result.X, f"sample {k}", last - k, result.iterations
 
 
-def _goal(problem, X_int, free_goal):
-    """``(goal (n, 3), shape (n, 3) or None)``: V_C on the target, the free region as ``free_goal`` says (shape:
-    what the smoothness term keeps, None for the goal itself)."""
-    if free_goal == "target":
-        return problem.V_tgt.copy(), None
+def _start(problem, solver, paths, motion, locked, weight):
+    """``(start (n, 3), label, samples tracked, Newton iterations, pinned (n,) bool or None)``.
+
+    :func:`_intersection_free_start` of the path lines (``paths``: (samples (S, n, 3), key frames (K, n, 3) or
+    None)); the elastic finish takes instead the key frames tracked with V_C weighted ``weight`` where their elastic
+    energy is lower (:func:`_lower_energy_start`), and puts the constrained vertices in no barrier pair and not
+    ``locked`` on their targets where CCD allows the move (:func:`_exact_constrained`): those are pinned (not
+    unknowns)."""
+    samples, frames = paths
+    start, label, tracked, iterations = _intersection_free_start(problem, solver, samples)
+    if motion.elastic is None:
+        return start, label, tracked, iterations, None
+    if frames is not None:
+        start, label, iterations = _lower_energy_start(problem, solver, frames, motion, (start, label, iterations),
+                                                       weight)
+    contact = solver.contact_vertices(solver.collisions(start), len(start))
+    start, pinned = _exact_constrained(problem, solver, start, contact, locked)
+    return start, label, tracked, iterations, pinned
+
+
+def _lower_energy_start(problem, solver, frames, motion, integrated, weight):
+    """``(start, label, Newton iterations)``: of the intersection-free candidates, the one whose elastic energy
+    (``motion.elastic``) is lower: the integrated one (``integrated``: :func:`_intersection_free_start`'s start, label
+    and iterations) or the key frames ``frames`` (K, n, 3) tracked by the contact solver with V_C weighted ``weight``
+    (label ``tracked``). An elastic energy cannot pull a region back through a contact, so the start decides on which
+    side of one it ends: where the integrated path lines follow a neighbouring part's motion (a finger caught on
+    the wrong side of the next), the tracked key frames do not."""
+    X, label, iterations = integrated
+    result = solver.compute_path(frames[0], frames[1:], weights=np.where(problem.mask, weight, 1.0))
+    energies = motion.elastic.energy(X), motion.elastic.energy(result.X)
+    log.info("contact finish: elastic energy of the %s start %.4g, of the tracked key frames %.4g (%d Newton "
+             "iterations)", label, energies[0], energies[1], result.iterations)
+    if energies[1] < energies[0]:
+        return result.X, "tracked", iterations + result.iterations
+    return X, label, iterations + result.iterations
+
+
+def _motion(problem, X_int, settings):
+    """The :class:`_Motion` of ``settings.free_goal``: V_C on the target, the free region as the goal says (module
+    docstring, 2.); ``X_int`` (n, 3) the integrated pose."""
+    if settings.free_goal == "elastic":
+        elastic = rest_elastic_energy(problem.V_ref, problem.F, problem.V_tgt, settings.distortion_limit,
+                                      settings.bending)
+        return _Motion(problem.V_tgt.copy(), None, elastic, settings.elastic_weight)
+    if settings.free_goal == "target":
+        return _Motion(problem.V_tgt.copy(), None, None, 1.0)
     mask = problem.mask
     integrated = X_int + biharmonic_extension(problem.A, problem.V_tgt - X_int, mask, ~mask)
     integrated[mask] = problem.V_tgt[mask]
-    return (problem.V_tgt.copy(), integrated) if free_goal == "blend" else (integrated, None)
+    if settings.free_goal == "blend":
+        return _Motion(problem.V_tgt.copy(), integrated, None, 1.0)
+    return _Motion(integrated, None, None, 1.0)
 
 
 def _locked_vertices(problem):
@@ -210,14 +288,14 @@ def _untangled(problem, X, exact, locked, most):
     return X, exact, none
 
 
-def _released(problem, solver, result, X, goals, weight):
+def _released(problem, solver, result, X, motion, weight):
     """``(ContactResult, X (n, 3), exact (n,) bool)`` after pulling every constrained vertex with ``weight`` from
-    ``X`` toward ``goals`` (:func:`_goal`): where the target's undoing of the reference's own intersections could not
-    be taken (:func:`_untangled`), the vertices held back by :func:`_locked_vertices` still go as close to their
-    targets as the barrier lets them (lion-08: V_C max 1.7e-3 d held back, 1.7e-4 d released). Iterations and
-    seconds add up."""
-    goal, shape = goals
-    released = solver.compute_pose(X, goal, np.where(problem.mask, weight, 1.0), shape=shape)
+    ``X`` as ``motion`` (:func:`_motion`) moves it: where the target's undoing of the reference's own intersections
+    could not be taken (:func:`_untangled`), the vertices held back by :func:`_locked_vertices` still go as close to
+    their targets as the barrier lets them (lion-08: V_C max 1.7e-3 d held back, 1.7e-4 d released). Iterations
+    and seconds add up."""
+    exact = problem.mask & (X == problem.V_tgt).all(axis=1)
+    released = motion.solve(solver, X, problem.mask, weight, None if motion.elastic is None else exact)
     released.iterations += result.iterations
     released.seconds += result.seconds
     X, exact = _exact_constrained(problem, solver, released.X, released.contact, np.zeros(len(X), dtype=bool))

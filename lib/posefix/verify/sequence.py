@@ -138,7 +138,7 @@ def repair_pose(problem, X, d, eps, fit_max_error_rel, settings=RepairSettings()
     return _verified(problem, X, replaced, (integrated_dev, integrated), d, seconds)
 
 
-def finish_pose(problem, samples, d, solver, settings=FinishSettings()):
+def finish_pose(problem, samples, d, solver, settings=FinishSettings(), frames=None):
     """Repair an integrated pose with the contact finish and verify the result.
 
     Parameters
@@ -151,6 +151,8 @@ def finish_pose(problem, samples, d, solver, settings=FinishSettings()):
     solver : posefix.mesh.contact_solver.ContactSolver
         Built on the reference with its intersecting faces tolerated.
     settings : FinishSettings
+    frames : (K, n, 3) float, optional
+        The key frames (the elastic finish's second candidate start, :func:`contact_finish`).
 
     Returns
     -------
@@ -160,7 +162,7 @@ def finish_pose(problem, samples, d, solver, settings=FinishSettings()):
         intersections; the metrics add the finish's (:func:`contact_finish`).
     """
     integrated = deviation(samples[-1], problem.V_tgt, problem.mask, d)
-    finish = contact_finish(problem, solver, samples, settings)
+    finish = contact_finish(problem, solver, samples, settings, frames)
     replaced = (finish.exact * np.uint8(REPRODUCED) | finish.contact * np.uint8(CONTACT)
                 | finish.untangled * np.uint8(REPLACED_NEW_INTERSECTION))
     result = _verified(problem, finish.X, replaced, integrated, d, {"contact": finish.metrics["contact_seconds"]},

@@ -20,7 +20,7 @@ import time
 from pathlib import Path
 
 from posefix.io.containers import CONTAINER_SUFFIXES, container_format, container_stem
-from posefix.report.tables import pose_status
+from posefix.report.tables import entry_status
 from posefix.workflow.progress import RunProgress
 
 WORKFLOW = Path(__file__).resolve().parents[3]
@@ -224,7 +224,7 @@ def finished_lines(reports, results, most=10, container=None):
         entries = json.loads((reports / "summary.json").read_text())["poses"]
     except (OSError, ValueError, KeyError):
         return []
-    statuses = [pose_status(entry) for entry in entries]
+    statuses = [entry_status(entry) for entry in entries]
     kinds = [kind for kind, _ in statuses]
     counts = ", ".join(f"{kinds.count(kind)} {kind}" for kind in ("ok", "fallback", "check"))
     lines = [f"posefix: {len(entries)} poses repaired: {counts}"]

@@ -1,7 +1,8 @@
 """Discrete-shell energy of example-driven deformation (Fröhlich & Botsch 2011).
 
 S0 §5 ("Benefits for subsequent processing") checks repaired poses by how a downstream nonlinear
-solver behaves on them. The energy is a sum of squared residuals, one per edge for stretching and
+solver behaves on them; the contact solver's elastic finish minimizes the same energy, with a rest state
+taken from the target where it is not distorted (:func:`rest_elastic_energy`). The energy is a sum of squared residuals, one per edge for stretching and
 one per interior edge for bending:
 
     r_l = w_l (l_e - l*_e),          w_l = sqrt(k_l / lbar_e^2)
@@ -24,6 +25,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from posefix.mesh.geometry import edge_lengths, face_areas
+from posefix.mesh.distortion import face_distortion
 from posefix.mesh.topology import edges
 from posefix.mesh.tolerances import TINY
 
@@ -119,9 +121,11 @@ def dihedral_gradients(V, H):
 class ShellEnergy:
     """The example-driven discrete-shell energy of one mesh and one example.
 
-    Build with :func:`shell_energy`. ``residuals(V)`` gives r (e + h,), ``jacobian(V)`` the sparse
-    d r / d vec(V) ((e + h, 3 n) CSR, column ``3 v + c`` for coordinate c of vertex v); the energy is
-    ``r . r`` (dimensionless).
+    Build with :func:`shell_energy` (or :func:`rest_elastic_energy`). ``residuals(V)`` gives r (e + h,),
+    ``jacobian(V)`` the sparse d r / d vec(V) ((e + h, 3 n) CSR, column ``3 v + c`` for coordinate c of vertex v);
+    the energy is ``r . r`` (dimensionless). With ``log_strain`` the stretching residuals are
+    ``w_l log(l_e / l*_e)``: a stretch and the crush by its inverse cost the same, and a collapsed edge costs
+    without bound (the linear ``w_l (l_e - l*_e)`` costs at most ``w_l l*_e`` for it).
     """
     hinges: Hinges
     w_stretch: np.ndarray      # (e,) w_l
@@ -129,6 +133,7 @@ class ShellEnergy:
     length_target: np.ndarray  # (e,) l*
     angle_target: np.ndarray   # (h,) theta*
     n: int
+    log_strain: bool = False
     _order: np.ndarray = field(repr=False, default=None)    # Jacobian entries in CSR order
     _indices: np.ndarray = field(repr=False, default=None)  # their columns
     _indptr: np.ndarray = field(repr=False, default=None)   # the rows' starts in them
@@ -147,7 +152,11 @@ class ShellEnergy:
 
     def residuals(self, V):
         """Residuals r, (e + h,) float: stretching rows first, then bending rows."""
-        rl = self.w_stretch * (edge_lengths(V, self.hinges.edges) - self.length_target)
+        lengths = edge_lengths(V, self.hinges.edges)
+        if self.log_strain:
+            rl = self.w_stretch * np.log(np.maximum(lengths, TINY) / self.length_target)
+        else:
+            rl = self.w_stretch * (lengths - self.length_target)
         rb = self.w_bend * wrap_angle(dihedral_angles(V, self.hinges.hinges) - self.angle_target)
         return np.r_[rl, rb]
 
@@ -155,7 +164,8 @@ class ShellEnergy:
         """Entries of the Jacobian in the fixed pattern (``jacobian`` builds the matrix from them)."""
         E = self.hinges.edges
         d = V[E[:, 1]] - V[E[:, 0]]
-        u = d / np.maximum(np.linalg.norm(d, axis=1), TINY)[:, None]
+        lengths = np.maximum(np.linalg.norm(d, axis=1), TINY)
+        u = d / (lengths ** 2 if self.log_strain else lengths)[:, None]
         gl = self.w_stretch[:, None] * np.c_[-u, u]
         gb = self.w_bend[:, None] * dihedral_gradients(V, self.hinges.hinges).reshape(len(self.w_bend), 12)
         return np.r_[gl.reshape(-1), gb.reshape(-1)]
@@ -167,6 +177,63 @@ class ShellEnergy:
 
     def energy(self, V):
         """Energy sum r^2 at ``V`` (n, 3) float (dimensionless)."""
+        r = self.residuals(V)
+        return float(r @ r)
+
+
+@dataclass
+class FaceAreaEnergy:
+    """Log-area residuals ``w_f log(A_f / A*_f)`` of a triangle mesh's faces: a face collapsed toward zero area costs
+    without bound, which edge lengths alone do not ensure (a sliver keeps its edges).
+
+    Attributes
+    ----------
+    faces : (m, 3) int
+    weights : (m,) float
+        ``w_f``.
+    area_target : (m,) float
+        ``A*_f``, positive.
+    n : int
+        Vertex count.
+    """
+    faces: np.ndarray
+    weights: np.ndarray
+    area_target: np.ndarray
+    n: int
+
+    def residuals(self, V):
+        """Residuals, (m,) float."""
+        return self.weights * np.log(np.maximum(face_areas(V, self.faces), TINY) / self.area_target)
+
+    def jacobian(self, V):
+        """Sparse Jacobian d r / d vec(V), (m, 3 n) CSR: ``d A / d x_i = 1/2 n_hat x (x_k - x_j)`` for the corners
+        ``(i, j, k)`` of a face in order."""
+        F = self.faces
+        cross = np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])
+        double = np.maximum(np.linalg.norm(cross, axis=1), TINY)
+        unit = cross / double[:, None]
+        grads = [np.cross(unit, V[F[:, (c + 2) % 3]] - V[F[:, (c + 1) % 3]]) for c in range(3)]
+        values = np.stack(grads, axis=1) * (self.weights / double)[:, None, None]  # d log A = dA / A, A = double / 2
+        cols = (3 * np.repeat(F, 3, axis=1) + np.tile([0, 1, 2], 3)).reshape(-1)
+        rows = np.repeat(np.arange(len(F)), 9)
+        return sp.csr_matrix((values.reshape(-1), (rows, cols)), shape=(len(F), 3 * self.n))
+
+
+@dataclass
+class ElasticEnergy:
+    """A sum of squared residuals of several terms (:class:`ShellEnergy`, :class:`FaceAreaEnergy`), ``r . r``."""
+    terms: list
+
+    def residuals(self, V):
+        """The terms' residuals one after the other, float array."""
+        return np.concatenate([t.residuals(V) for t in self.terms])
+
+    def jacobian(self, V):
+        """The terms' Jacobians stacked, CSR."""
+        return sp.vstack([t.jacobian(V) for t in self.terms], format="csr")
+
+    def energy(self, V):
+        """Energy ``r . r`` at ``V`` (n, 3) float (dimensionless)."""
         r = self.residuals(V)
         return float(r @ r)
 
@@ -195,3 +262,52 @@ def shell_energy(V_ref, F, V_example, alpha, k_bend, k_stretch=1.0, hinges=None)
     angles = theta0 + alpha * wrap_angle(dihedral_angles(V_example, H.hinges) - theta0)
     return ShellEnergy(H, np.sqrt(k_stretch) / lbar, np.sqrt(k_bend * lbar_h ** 2 / area), lengths, angles,
                        len(V_ref))
+
+
+def rest_elastic_energy(V_ref, F, V_pose, limit, k_bend, hinges=None):
+    """Elastic energy (shell and face areas) whose rest state is ``V_pose``'s shape within ``limit`` of ``V_ref``'s.
+
+    An edge's rest length is the pose's, clipped to ``[l_ref / limit, limit l_ref]``; a face's rest area likewise
+    the pose's clipped to ``[A_ref / limit, limit A_ref]``; a hinge's rest angle is the pose's where both its faces
+    are within ``limit`` of the reference (edge-length and area ratios,
+    :func:`posefix.mesh.distortion.face_distortion`), the reference's elsewhere. So a stretched or collapsed region
+    of the pose (an LBS candy wrapper, a crushed fold) does not become the rest state beyond what the limit
+    tolerates. Stretching and areas are measured as log-strain (weights 1: a face crushed costs as much as one
+    stretched by the inverse ratio, a collapse without bound); bending's weights are the reference's
+    (:func:`shell_energy`).
+
+    Parameters
+    ----------
+    V_ref, V_pose : (n, 3) float
+        Reference and pose positions (same faces).
+    F : (m, 3) int
+    limit : float
+        Largest ratio of a rest length or area to the reference's (and of face shapes for the angles), > 1.
+    k_bend : float
+        Bending stiffness ``k_b``.
+    hinges : Hinges, optional
+        ``mesh_hinges(F)``, when already computed.
+
+    Returns
+    -------
+    ElasticEnergy
+        ``[ShellEnergy, FaceAreaEnergy]``; zero at ``V_pose`` when no face of the pose is beyond ``limit``.
+
+    Examples
+    --------
+    >>> V = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0]]); F = np.array([[0, 1, 2], [2, 1, 3]])
+    >>> shell, areas = rest_elastic_energy(V, F, V * [8.0, 1.0, 1.0], 4.0, 1e-2).terms
+    >>> shell.length_target.round(3).tolist(), areas.area_target.tolist()  # 8x stretched: at rest at 4x
+    ([4.0, 1.0, 5.657, 1.0, 4.0], [2.0, 2.0])
+    """
+    H = mesh_hinges(F) if hinges is None else hinges
+    shell = shell_energy(V_ref, F, V_pose, 1.0, k_bend, hinges=H)
+    reference = edge_lengths(V_ref, H.edges)
+    shell.length_target = np.clip(shell.length_target, reference / limit, reference * limit)
+    edge, area = face_distortion(V_pose, V_ref, F)
+    keep = ((edge <= limit) & (area <= limit))[H.hinge_faces].all(axis=1)
+    shell.angle_target = np.where(keep, shell.angle_target, dihedral_angles(V_ref, H.hinges))
+    shell.log_strain, shell.w_stretch = True, np.ones(len(H.edges))
+    rest = face_areas(V_ref, F)
+    areas = np.clip(face_areas(V_pose, F), rest / limit, rest * limit)
+    return ElasticEnergy([shell, FaceAreaEnergy(np.asarray(F), np.ones(len(F)), areas, len(V_ref))])

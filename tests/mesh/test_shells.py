@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from conftest import icosphere
-from posefix.downstream.shells import dihedral_angles, mesh_hinges, shell_energy, wrap_angle
+from posefix.mesh.shells import dihedral_angles, mesh_hinges, shell_energy, wrap_angle
 
 
 def _hinge(beta):
