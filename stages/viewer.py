@@ -3,8 +3,9 @@
 Reads ``summary.json`` (the poses, their status and baseline repairs) and each pose's ``keyframes.h5``,
 ``classify.h5``, ``verify.h5`` and baseline artifacts under ``--results``, and writes one self-contained HTML file
 that opens offline in any current browser: every pose's target, its repairs and the reference under one camera,
-intersecting faces (red: new, orange: the reference's own), the deviation heat map, ``V_C`` / free / pass-through
-regions (``posefix.report.viewer``).
+intersecting faces (red: new, orange: the reference's own), the faces stretched or crushed beyond the summary's
+distortion limit (a repair's against both the target and the reference, the target's against the reference), the
+deviation heat map, ``V_C`` / free / pass-through regions (``posefix.report.viewer``).
 """
 
 import json
@@ -17,15 +18,18 @@ import numpy as np
 from posefix.io.artifacts import read_artifact, read_baseline
 from posefix.io.errors import InputError
 from posefix.io.files import atomic_write_bytes
+from posefix.mesh.distortion import distorted_faces, distortion_summary
 from posefix.mesh.intersections import intersecting_faces, self_intersecting_pairs
 from posefix.report.contents import VIEWER_FILES
 from posefix.report.tables import baseline_names, entry_status
 from posefix.report.viewer import mesh_record, page_data, pose_record, viewer_html
 from posefix.spacetime.classification import split_frames
-from posefix.workflow.cli import run_stage, stage_parser
+from posefix.workflow.cli import library_defaults, run_stage, stage_parser
 from posefix.workflow.timings import Timings
 
 PAGE = Path(posefix.report.viewer.__file__).parent
+DISTORTION_LIMIT = library_defaults(distortion_summary)["limit"]
+"""The distortion limit of an entry without one (a summary.json written before the distortion was measured)."""
 
 
 def build_parser():
@@ -79,9 +83,13 @@ def main(args, log):
         reference = (kf["reference"], kf["faces"], kf["reference_hit"], float(attrs["metrics"]["bbox_diagonal"]))
         shown = np.vstack([kf["reference"], target[0], *(X for X, _ in repairs.values())])
         bounds += [shown.min(axis=0), shown.max(axis=0)]
-        hit = kf["reference_hit"]
-        meshes = [mesh_record("target", *target, hit, ("reference", reference[0]))]
-        meshes += [mesh_record(name, X, faces, hit, ("target", target[0])) for name, (X, faces) in repairs.items()]
+        hit, F = kf["reference_hit"], kf["faces"]
+        limit = entry.get("distortion", {}).get("limit", DISTORTION_LIMIT)
+        meshes = [mesh_record("target", *target, hit, ("reference", reference[0]),
+                              distorted_faces(target[0], [kf["reference"]], F, limit))]
+        meshes += [mesh_record(name, X, faces, hit, ("target", target[0]),
+                               distorted_faces(X, [target[0], kf["reference"]], F, limit))
+                   for name, (X, faces) in repairs.items()]
         poses.append(pose_record(entry["pose"], entry_status(entry), meshes, cl["mask"].astype(bool),
                                  ve["replaced"], ve["deviation"]))
         log.info("%s: %s", entry["pose"], ", ".join(f"{m['name']} {m['faces']} faces ({m['new']} new)" for m in meshes))
@@ -89,7 +97,7 @@ def main(args, log):
     with timings.step("page"):
         files = {key: (PAGE / path).read_text(encoding="utf-8") for key, path in VIEWER_FILES.items()}
         bounds = (np.min(bounds, axis=0), np.max(bounds, axis=0))  # of every mesh: the first view shows them all
-        page = viewer_html(page_data(library, (V, hit), F, poses, diagonal, bounds), files).encode()
+        page = viewer_html(page_data(library, (V, hit), F, poses, diagonal, bounds, limit), files).encode()
         atomic_write_bytes(args.out, page)
     log.info("wrote %s (%d poses, %.1f MB)", args.out, len(poses), len(page) / 1e6)
 

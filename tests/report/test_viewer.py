@@ -86,7 +86,9 @@ def library(tmp_path_factory):
         write_artifact(folder / "verify.h5", "verify", {
             "repaired": repaired, "deviation": np.linalg.norm(repaired - V_tgt, axis=1) / d, "replaced": replaced,
             "pairs": self_intersecting_pairs(repaired, F)}, **common)
-        write_artifact(folder / "medial.h5", "repair_medial", {"repaired": V_tgt + 0.01 * (i + 1)}, **common)
+        medial = V_tgt + 0.01 * (i + 1)
+        medial[:len(medial) // 3, 2] *= 0.05  # sphere A flattened: faces crushed beyond the distortion limit
+        write_artifact(folder / "medial.h5", "repair_medial", {"repaired": medial}, **common)
     summary = tmp / "summary.json"
     summary.write_text(json.dumps({"library": "spheres", "poses": [_entry(p, ["medial"]) for p in ["p-01", "p-02"]]}))
     run_stage("viewer", "--summary", summary, "--results", tmp / "results", "--out", tmp / "viewer.html")
@@ -184,6 +186,27 @@ def test_the_heat_map_toggle_changes_the_colours(library, tmp_path):
     faces = screenshot(page, "pose=p-01&mesh=space-time", tmp_path)
     heat = screenshot(page, "pose=p-01&mesh=space-time&mode=heat", tmp_path)
     assert (np.abs(faces - heat).sum(axis=2) > 0.1).mean() > 0.02
+
+
+@needs_chromium
+def test_the_distortion_toggle_colours_the_crushed_faces_and_names_the_limit(library, tmp_path):
+    page = library / "viewer.html"
+    faces = screenshot(page, "pose=p-01&mesh=medial", tmp_path)
+    crushed = screenshot(page, "pose=p-01&mesh=medial&mode=distortion", tmp_path)
+    repaired = screenshot(page, "pose=p-01&mesh=space-time&mode=distortion", tmp_path)
+    purple = [(np.abs(rgb - [0.55, 0.20, 0.80]).max(axis=2) < 0.25)[120:540] for rgb in (faces, crushed, repaired)]
+    assert purple[1].sum() > 500 and purple[0].sum() < purple[1].sum() / 10  # the flattened sphere, shaded
+    assert purple[2].sum() < purple[1].sum() / 10  # the space-time repair moved B rigidly: nothing distorted
+    dom = browse(page, "pose=p-01&mesh=medial&mode=distortion", "--dump-dom", tmp=tmp_path)
+    assert "beyond 4x" in dom and "distorted" in dom
+
+
+def test_the_page_records_each_repairs_distorted_faces(library):
+    text = (library / "viewer.html").read_text()
+    data = json.loads(re.search(r'<script type="application/json" id="posefix-data">(.*?)</script>', text,
+                                re.S).group(1).replace("<\\/", "</"))
+    counts = {m["name"]: m["distorted_count"] for m in data["poses"][0]["meshes"]}
+    assert counts["medial"] > 50 and counts["space-time"] == 0 and data["distortion_limit"] == 4.0
 
 
 @needs_chromium

@@ -21,7 +21,7 @@ from matplotlib import colormaps
 from matplotlib.colors import to_hex
 
 from posefix.report.figures import CONSTRAINED, FLAG_COLORS, FREE, HEAT_MAP, heat_limit
-from posefix.report.rasterizer import HIGHLIGHT, SECONDARY, SURFACE, camera
+from posefix.report.rasterizer import DISTORTED, HIGHLIGHT, SECONDARY, SURFACE, camera
 from posefix.report.tables import STATUS_COLORS
 from posefix.verify.flags import REPLACED_PASS_THROUGH
 
@@ -64,7 +64,7 @@ def decode_positions(text, n, base=None):
     return (bits if base is None else bits ^ position_bits(base)).view("<f4")
 
 
-def mesh_record(name, V, hit, reference_hit, base=None):
+def mesh_record(name, V, hit, reference_hit, base=None, distorted=None):
     """One mesh of the page, dict.
 
     Parameters
@@ -78,16 +78,22 @@ def mesh_record(name, V, hit, reference_hit, base=None):
         The reference's (the mesh's other intersecting faces are new).
     base : (str, (n, 3) float), optional
         The mesh its positions are stored against (:func:`encode_positions`), by name and positions.
+    distorted : (m,) bool, optional
+        Its faces stretched or crushed beyond the distortion limit (:func:`posefix.mesh.distortion.distorted_faces`);
+        none by default.
 
     Returns
     -------
     dict
-        ``name``, ``base`` (None without), ``X`` (positions), ``hit`` (faces as packed bits, :func:`encode_array`),
-        ``faces`` and ``new`` (counts of intersecting and new intersecting faces).
+        ``name``, ``base`` (None without), ``X`` (positions), ``hit`` and ``distorted`` (faces as packed bits,
+        :func:`encode_array`), ``faces``, ``new`` and ``distorted_count`` (counts of intersecting, new
+        intersecting and distorted faces).
     """
+    distorted = np.zeros(len(hit), dtype=bool) if distorted is None else distorted
     return {"name": name, "base": None if base is None else base[0],
             "X": encode_positions(V, None if base is None else base[1]), "hit": encode_array(np.packbits(hit)),
-            "faces": int(hit.sum()), "new": int((hit & ~reference_hit).sum())}
+            "faces": int(hit.sum()), "new": int((hit & ~reference_hit).sum()),
+            "distorted": encode_array(np.packbits(distorted)), "distorted_count": int(distorted.sum())}
 
 
 def pose_record(name, status, meshes, mask, replaced, deviation):
@@ -113,7 +119,7 @@ def pose_record(name, status, meshes, mask, replaced, deviation):
             "regions": encode_array(regions.astype(np.uint8)), "heat_limit": heat_limit(deviation)}
 
 
-def page_data(library, reference, F, poses, diagonal, bounds):
+def page_data(library, reference, F, poses, diagonal, bounds, limit=4.0):
     """Everything the page shows, JSON-ready dict.
 
     Parameters
@@ -130,15 +136,18 @@ def page_data(library, reference, F, poses, diagonal, bounds):
     bounds : (2, 3) float
         Lowest and highest coordinates of every mesh of the page: the camera's first view shows them all, from
         the side of the report's renders (:func:`posefix.report.rasterizer.camera`).
+    limit : float
+        The distortion limit of the meshes' ``distorted`` faces (the legend's).
     """
     V, hit = reference
     R = camera(V)
     center = np.mean(bounds, axis=0)
     corners = np.array([[bounds[i][0], bounds[j][1], bounds[k][2]] for i in (0, 1) for j in (0, 1) for k in (0, 1)])
     colors = {"surface": SURFACE, "highlight": HIGHLIGHT, "secondary": SECONDARY, "constrained": CONSTRAINED,
-              "free": FREE, "pass_through": FLAG_COLORS[REPLACED_PASS_THROUGH]}
+              "free": FREE, "pass_through": FLAG_COLORS[REPLACED_PASS_THROUGH], "distorted": DISTORTED}
     return {"library": library, "vertices": len(V), "face_count": len(F), "faces": encode_array(F.astype("<u4")),
             "reference": mesh_record("reference", V, hit, hit), "poses": poses, "diagonal": float(diagonal),
+            "distortion_limit": float(limit),
             "view": {"center": center.tolist(), "up": R[1].tolist(), "toward": R[2].tolist(),
                      "extent": np.abs((corners - center) @ R[:2].T).max(axis=0).tolist()},
             "colors": {k: to_hex(c) for k, c in colors.items()}, "status_colors": STATUS_COLORS,

@@ -1,7 +1,7 @@
 // posefix 3D viewer (reports/<library>/viewer.html): every pose's target, its repairs and the reference, one
 // camera for all. Data: the JSON of posefix.report.viewer (positions as float32 bits XOR their base mesh's, byte
 // planes, deflate, base64; faces once per library). State from and to the URL hash:
-// #pose=NAME&mesh=NAME&mode=faces|heat|regions&left=NAME (side by side with NAME on the left)&dump=NAME.
+// #pose=NAME&mesh=NAME&mode=faces|heat|regions|distortion&left=NAME (side by side with NAME on the left)&dump=NAME.
 import * as THREE from "three";
 import { OrbitControls } from "three/addons/controls/OrbitControls.js";
 
@@ -42,7 +42,8 @@ async function decodeMesh(record, base) {  // {name, X: Float32Array (n * 3), hi
     const other = new Uint32Array(base.X.buffer);
     for (let i = 0; i < bits.length; i++) bits[i] ^= other[i];
   }
-  return { name: record.name, X: new Float32Array(bits.buffer), hit: await decodeMask(record.hit) };
+  return { name: record.name, X: new Float32Array(bits.buffer), hit: await decodeMask(record.hit),
+    distorted: await decodeMask(record.distorted) };
 }
 
 const reference = (async () => {
@@ -96,6 +97,9 @@ function faceColors(mesh, decoded, pose) {
       const a = r[faces[3 * f]], b = r[faces[3 * f + 1]], c = r[faces[3 * f + 2]];
       put(f, cs[(a | b | c) & 2 ? 2 : (a & b & c & 1)]);
     }
+  } else if (state.mode === "distortion") {
+    const cs = [rgb(C.surface), rgb(C.distorted)];
+    for (let f = 0; f < m; f++) put(f, cs[mesh.distorted[f]]);
   } else {
     const cs = [rgb(C.surface), rgb(C.highlight), rgb(C.secondary)];
     for (let f = 0; f < m; f++) put(f, cs[mesh.hit[f] ? (refHit[f] ? 2 : 1) : 0]);
@@ -226,13 +230,20 @@ function toolbar(pose) {
   bar.append(button("h heat map", state.mode === "heat", "", () => show({ mode: state.mode === "heat" ? "faces" : "heat" })));
   bar.append(button("r regions", state.mode === "regions", "",
     () => show({ mode: state.mode === "regions" ? "faces" : "regions" })));
-  bar.append(button("s side by side", !!state.left, "", () => show({ left: state.left ? null : "target" })));
+  bar.append(button("d distortion", state.mode === "distortion", "",
+    () => show({ mode: state.mode === "distortion" ? "faces" : "distortion" })));
+  bar.append(button("s side by side", !!state.left, "", () => show(sideBySide())));
   bar.append(button("c camera", false, "", () => { resetCamera(); render(); }));
   const help = document.createElement("span");
   help.id = "help";
-  help.textContent = "keys: 1-9 mesh (shift: left pane), h heat map, r regions, s side by side, " +
+  help.textContent = "keys: 1-9 mesh (shift: left pane), h heat map, r regions, d distortion, s side by side, " +
     "j/k next/previous pose, c camera; drag: orbit, right drag: pan, wheel: zoom";
   bar.append(help);
+}
+
+function sideBySide() {  // on: the target on the left, against the space-time repair unless a repair is shown
+  if (state.left) return { left: null };
+  return { left: "target", mesh: state.mesh === "target" ? "space-time" : state.mesh };
 }
 
 function swatch(color, label) {
@@ -245,6 +256,9 @@ function legend(pose) {
     const stops = DATA.heat.colors.filter((c, i) => i % 15 === 0 || i === DATA.heat.colors.length - 1);
     el.innerHTML = `0<span id="colorbar" style="background:linear-gradient(to right,${stops.join(",")})"></span>` +
       `≥ ${pose.heat_limit.toPrecision(2)} &nbsp; |mesh − target| / bbox diagonal (the report's deviation scale)`;
+  } else if (state.mode === "distortion") {
+    el.innerHTML = swatch(C.distorted, `stretched or crushed beyond ${DATA.distortion_limit}x (edge-length or area ` +
+      "ratio) against both the target and the reference; the target's against the reference");
   } else if (state.mode === "regions") {
     el.innerHTML = swatch(C.constrained, "V_C (constrained)") + swatch(C.free, "free (integrated through the field)") +
       swatch(C.pass_through, "pass-through (copied from the target)");
@@ -260,7 +274,8 @@ function labels(pose) {
   el.replaceChildren(...names.map((name, i) => {
     const span = document.createElement("span");
     const record = pose.meshes.find((m) => m.name === name) || DATA.reference;
-    span.textContent = `${name}: ${record.faces} intersecting faces` + (name === "reference" ? "" : `, ${record.new} new`);
+    span.textContent = `${name}: ${record.faces} intersecting faces` + (name === "reference" ? "" : `, ${record.new} new`) +
+      (state.mode === "distortion" && name !== "reference" ? `, ${record.distorted_count} distorted` : "");
     span.style.left = state.left ? `calc(${i * 50}% + 8px)` : "auto";
     span.style.right = state.left ? "auto" : "8px";
     return span;
@@ -328,7 +343,8 @@ document.addEventListener("keydown", (e) => {
   if (digit >= 1 && digit <= names.length) show(e.shiftKey ? { left: names[digit - 1] } : { mesh: names[digit - 1] });
   else if (e.key === "h") show({ mode: state.mode === "heat" ? "faces" : "heat" });
   else if (e.key === "r") show({ mode: state.mode === "regions" ? "faces" : "regions" });
-  else if (e.key === "s") show({ left: state.left ? null : "target" });
+  else if (e.key === "d") show({ mode: state.mode === "distortion" ? "faces" : "distortion" });
+  else if (e.key === "s") show(sideBySide());
   else if (e.key === "c") { resetCamera(); render(); }
   else if (e.key === "j" || e.key === "ArrowDown") show({ pose: Math.min(state.pose + 1, DATA.poses.length - 1) });
   else if (e.key === "k" || e.key === "ArrowUp") show({ pose: Math.max(state.pose - 1, 0) });
