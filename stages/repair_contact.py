@@ -42,10 +42,11 @@ def main(args, log):
         kf, _ = read_artifact(args.keyframes, "keyframes", ["frames", "faces", "reference", "target"])
         cl, _ = read_artifact(args.classify, "classify", ["pairs", "pair_offsets"])
     frames, F = np.concatenate([kf["reference"][None], kf["frames"][1:-1], kf["target"][None]]), kf["faces"]
-    reference_faces = intersecting_faces(split_frames(cl["pairs"], cl["pair_offsets"])[0], len(F))
+    reference_pairs = split_frames(cl["pairs"], cl["pair_offsets"])[0]
+    reference_faces = intersecting_faces(reference_pairs, len(F))
     settings, params = contact_settings(args)
     with timings.step("prepare"):
-        solver = ContactSolver(frames[0], F, reference_faces, settings, args.threads)
+        solver = ContactSolver(frames[0], F, reference_pairs, settings, args.threads)
     with timings.step("repair"):
         result = track_keyframes(solver, frames, reference_faces)
     metrics = result.metrics | {"intersecting_faces_reference": int(reference_faces.sum()),

@@ -137,7 +137,7 @@ def _finish(args, problem, integrated, fit_attrs, settings):
     contact, contact_params = contact_settings(args)
     finish = FinishSettings(args.free_goal, args.constrained_weight, args.untangle_rings, args.elastic_weight,
                             args.bending, args.distortion_limit)
-    solver = ContactSolver(problem.V_ref, problem.F, problem.reference_faces, contact, args.threads)
+    solver = ContactSolver(problem.V_ref, problem.F, problem.frame_pairs[0], contact, args.threads)
     result = finish_pose(problem, integrated["samples"], d, solver, finish, frames)
     return result, {"finish": "contact"} | asdict(finish) | contact_params
 

@@ -110,7 +110,7 @@ def test_the_distortion_metric_flags_the_snap_stretching_a_fold_and_not_the_cont
     snap = repair_pose(problem, samples[-1], 1.0, 1e-4, 1.0)  # the fit's error lets the snap reach the tip's target
     flagged = distortion_summary(snap.X, rests, F)
     assert snap.metrics["repaired_new"] == 0 and flagged["faces_over"] > 0 and flagged["edge_target"] > 4.0
-    contact = finish_pose(problem, samples, 1.0, ContactSolver(V, F))  # free goal: blend
+    contact = finish_pose(problem, samples, 1.0, ContactSolver(V, F))  # free goal: elastic
     clean = distortion_summary(contact.X, rests, F)
     assert contact.metrics["repaired_new"] == 0 and clean["faces_over"] == 0 and clean["edge_target"] < 1.1
     target = finish_pose(problem, samples, 1.0, ContactSolver(V, F), FinishSettings(free_goal="target"))
@@ -146,7 +146,7 @@ def test_where_the_target_undoes_the_references_own_intersection_that_region_tak
     pairs = [self_intersecting_pairs(P, F) for P in (V, target)]
     assert len(pairs[0]) > 0 and len(pairs[1]) == 0
     problem = RepairProblem.build(V, target, F, np.ones(len(V), bool), pairs)
-    result = finish_pose(problem, np.stack([V, V]), 1.0, ContactSolver(V, F, problem.reference_faces),
+    result = finish_pose(problem, np.stack([V, V]), 1.0, ContactSolver(V, F, problem.frame_pairs[0]),
                          FinishSettings(free_goal=free_goal))
     untangled = result.metrics["contact_untangled"]
     assert result.metrics["repaired_new"] == 0 and 0 < untangled <= len(B)

@@ -12,13 +12,13 @@ weights, ``a``: vertex areas over their mean, ``L``/``M``: the cotangent Laplaci
 reference (so the bi-Laplacian smoothness term spreads a contact's push over about the smoothing length
 ``l``, and a rigid motion of the goals costs nothing), ``kappa``: IPC's adaptive barrier stiffness.
 
-The reference may intersect itself. Its intersecting faces are *tolerated*: a primitive pair whose
-every incident face is tolerated is removed from the broad phase's candidates before the barrier and
-the CCD see them (an intersection it may form involves tolerated faces only), and no other pair is:
-a face that does not intersect in the reference never comes to intersect anything. ``ipctk``'s vertex
-filter alone would silence every pair whose vertices all belong to tolerated faces (a primitive next to
-them too), so the region's own broad phase gives those pairs back, less the tolerated ones: the Python
-work is the tolerated region's, not the mesh's.
+The reference may intersect itself. Its intersecting face pairs are *tolerated*: the edge-edge and
+face-vertex pairs of each (9 and 6) are removed from the broad phase's candidates before the barrier and the
+CCD see them, and no other primitive pair is: a face that does not intersect in the reference never comes to
+intersect anything, and two tolerated faces of different intersection sites cannot pass through each other.
+``ipctk``'s vertex filter alone would silence every pair whose vertices all belong to tolerated faces (a
+primitive next to them too), so the region's own broad phase gives those pairs back, less the tolerated ones:
+the Python work is the tolerated region's, not the mesh's.
 
 :class:`ContactSolver` precomputes per reference; :meth:`ContactSolver.compute_pose` moves one pose toward its
 goals, :meth:`ContactSolver.compute_path` carries one through a sequence of poses (key frames, path-line samples).
@@ -111,40 +111,52 @@ class ContactResult:
     seconds: float
 
 
-def tolerated_primitives(F, E, faces_to_edges, tolerated_faces, n):
-    """Vertices, edges and faces all of whose incident faces are tolerated.
+def tolerated_pair_keys(F, faces_to_edges, pairs, n, ne):
+    """Keys of the tolerated primitive pairs: of each intersecting face pair, its 9 edge-edge and 6 face-vertex
+    pairs whose primitives lie on intersecting faces only.
+
+    A pair of two intersection sites is not among them (their faces do not intersect each other), nor one with a
+    primitive next to the site (an edge or vertex shared with a face that does not intersect), so an intersection
+    can neither reach another site nor spread to a clean face.
 
     Parameters
     ----------
     F : (m, 3) int
-    E : (e, 2) int
-        The mesh's edges.
     faces_to_edges : (m, 3) int
-        Row of ``E`` of each face's edges.
-    tolerated_faces : (m,) bool
-    n : int
-        Vertex count.
+        Row of the mesh's edges of each face's edges.
+    pairs : (P, 2) int
+        Face pairs (the reference's intersecting ones).
+    n, ne : int
+        Vertex and edge counts.
 
     Returns
     -------
-    vertices : (n,) bool
-    edges : (e,) bool
-    faces : (m,) bool
+    ee : (k,) int64
+        Sorted keys ``min(a, b) ne + max(a, b)`` of the edge pairs ``(a, b)``.
+    fv : (l,) int64
+        Sorted keys ``f n + v`` of the face-vertex pairs ``(f, v)``.
 
     Examples
     --------
-    >>> F = np.array([[0, 1, 2], [0, 2, 3]]); E = np.array([[0, 1], [1, 2], [0, 2], [2, 3], [0, 3]])
-    >>> v, e, f = tolerated_primitives(F, E, np.array([[0, 1, 2], [2, 3, 4]]), np.array([True, False]), 4)
-    >>> v.tolist(), e.tolist()
-    ([False, True, False, False], [True, True, False, False, False])
+    >>> F = np.array([[0, 1, 2], [3, 4, 5]]); E2F = np.array([[0, 1, 2], [3, 4, 5]])
+    >>> ee, fv = tolerated_pair_keys(F, E2F, np.array([[0, 1]]), 6, 6)
+    >>> len(ee), fv.tolist()
+    (9, [3, 4, 5, 6, 7, 8])
     """
-    vertices = np.ones(n, dtype=bool)
-    vertices[F[~tolerated_faces].ravel()] = False
-    vertices[np.setdiff1d(np.arange(n), F.ravel())] = False
-    edges = np.zeros(len(E), dtype=bool)
-    edges[faces_to_edges[tolerated_faces].ravel()] = True
-    edges[faces_to_edges[~tolerated_faces].ravel()] = False
-    return vertices, edges, tolerated_faces.copy()
+    pairs = np.asarray(pairs, dtype=np.int64).reshape(-1, 2)
+    faces = np.zeros(len(F), dtype=bool)
+    faces[pairs.ravel()] = True
+    vertex_ok = np.ones(n, dtype=bool)
+    vertex_ok[F[~faces].ravel()] = False
+    edge_ok = np.zeros(ne, dtype=bool)
+    edge_ok[faces_to_edges[faces].ravel()] = True
+    edge_ok[faces_to_edges[~faces].ravel()] = False
+    f, g = pairs[:, 0], pairs[:, 1]
+    a = np.repeat(faces_to_edges[f], 3, axis=1).ravel().astype(np.int64)
+    b = np.tile(faces_to_edges[g], (1, 3)).ravel().astype(np.int64)
+    ee = (np.minimum(a, b) * ne + np.maximum(a, b))[edge_ok[a] & edge_ok[b]]
+    face, vertex = np.concatenate([np.repeat(f, 3), np.repeat(g, 3)]), np.concatenate([F[g].ravel(), F[f].ravel()])
+    return np.unique(ee), np.unique((face * n + vertex)[vertex_ok[vertex]].astype(np.int64))
 
 
 class ContactSolver:
@@ -155,9 +167,11 @@ class ContactSolver:
     V_ref : (n, 3) float
         Reference positions (the smoothness operator and the clearance are the reference's).
     F : (m, 3) int
-    tolerated_faces : (m,) bool, optional
-        Faces that may intersect (the reference's own intersecting faces); none by default. Primitive pairs
-        closer than ``touching * d`` in the reference (parts touching at rest) are tolerated too.
+    tolerated_pairs : (P, 2) int, optional
+        Face pairs that may intersect (the reference's own intersecting pairs); none by default. Only their
+        primitive pairs are dropped (:func:`tolerated_pair_keys`): two tolerated faces of different intersection
+        sites cannot pass through each other. Primitive pairs closer than ``touching * d`` in the reference (parts
+        touching at rest) are tolerated too.
     settings : ContactSettings
     threads : int
         Threads of ``ipctk``'s broad and narrow phases.
@@ -172,7 +186,7 @@ class ContactSolver:
     (True, True)
     """
 
-    def __init__(self, V_ref, F, tolerated_faces=None, settings=ContactSettings(), threads=1):
+    def __init__(self, V_ref, F, tolerated_pairs=None, settings=ContactSettings(), threads=1):
         ipctk.set_num_threads(threads)
         ipctk.set_logger_level(ipctk.LoggerLevel.warn)
         V_ref = np.asarray(V_ref, dtype=np.float64)
@@ -180,8 +194,10 @@ class ContactSolver:
         E = ipctk.edges(self.F)
         self.edge_length = float(np.linalg.norm(V_ref[E[:, 0]] - V_ref[E[:, 1]], axis=1).mean())
         self.mesh = ipctk.CollisionMesh(V_ref, E, self.F)
-        tolerated = np.zeros(len(F), dtype=bool) if tolerated_faces is None else np.asarray(tolerated_faces, bool)
-        self.tolerated = tolerated_primitives(self.F, E, self.mesh.faces_to_edges, tolerated, len(V_ref))
+        pairs = np.zeros((0, 2), np.int64) if tolerated_pairs is None else np.asarray(tolerated_pairs).reshape(-1, 2)
+        self.tolerated = tolerated_pair_keys(self.F, self.mesh.faces_to_edges, pairs, len(V_ref), len(E))
+        self.tolerated_faces = np.zeros(len(F), dtype=bool)
+        self.tolerated_faces[pairs.ravel()] = True
         self._touching = (np.zeros(0, np.int64), np.zeros(0, np.int64))
         self._touching = self._touching_pairs(V_ref)
         self._sub = self._tolerated_region(V_ref, E)
@@ -193,8 +209,8 @@ class ContactSolver:
         order = fill_reducing_order(pattern)  # the 3 x 3 blocks' order from the vertices' (kids240: 20 min -> s)
         self._order = order, (3 * order[:, None] + np.arange(3)).ravel()
         self._system = (None, None)
-        log.info("contact solver: %d vertices, %d tolerated faces and %d pairs touching at rest, clearance %.2e d, "
-                 "dhat %.2e d", len(V_ref), int(tolerated.sum()), sum(len(k) for k in self._touching),
+        log.info("contact solver: %d vertices, %d tolerated face pairs and %d pairs touching at rest, clearance %.2e d, "
+                 "dhat %.2e d", len(V_ref), len(pairs), sum(len(k) for k in self._touching),
                  self.clearance / self.d, self.dhat / self.d)
 
     def _touching_pairs(self, V):
@@ -211,7 +227,7 @@ class ContactSolver:
         near = self.contact_vertices([contacts], len(V))
         (ee, ee_keys), (fv, fv_keys) = self._pairs(c)
         E, F = self.mesh.edges, self.mesh.faces
-        keep_ee, keep_fv = self._kept(ee, ee_keys, fv, fv_keys)
+        keep_ee, keep_fv = self._kept(ee_keys, fv_keys)
         keep_ee &= near[E[ee]].any(axis=(1, 2))
         keep_fv &= near[F[fv[:, 0]]].any(axis=1) | near[fv[:, 1]]
         ee_c, fv_c = c.ee_candidates, c.fv_candidates  # (each read copies the whole list)
@@ -241,7 +257,7 @@ class ContactSolver:
         that are not tolerated, from the broad phase of the region's own mesh: ``(mesh, vertices (r,), edges (e_r,),
         faces (f_r,))``, the last three the region's primitives' ids in the whole mesh."""
         region = np.zeros(len(V), dtype=bool)
-        region[self.F[self.tolerated[2]].ravel()] = True
+        region[self.F[self.tolerated_faces].ravel()] = True
         n, ne = len(V), len(E)
         touching_ee, touching_fv = self._touching
         region[E[np.concatenate([touching_ee // ne, touching_ee % ne])].ravel()] = True
@@ -286,7 +302,7 @@ class ContactSolver:
         (ee, _), (fv, _) = self._pairs(region)
         ee, fv = edges[ee], np.column_stack([faces[fv[:, 0]], vertices[fv[:, 1]]])
         ee_keys, fv_keys = self._keys(ee, fv)
-        keep_ee, keep_fv = self._kept(ee, ee_keys, fv, fv_keys)
+        keep_ee, keep_fv = self._kept(ee_keys, fv_keys)
         if not (keep_ee.any() or keep_fv.any()):
             return [c]
         extra = ipctk.Candidates()
@@ -294,11 +310,11 @@ class ContactSolver:
         extra.fv_candidates = [ipctk.FaceVertexCandidate(int(f), int(v)) for f, v in fv[keep_fv]]
         return [c, extra]
 
-    def _kept(self, ee, ee_keys, fv, fv_keys):
-        """Masks of the edge-edge pairs (k, 2) and face-vertex pairs (l, 2) that are neither tolerated nor touching."""
-        v_ok, e_ok, f_ok = self.tolerated
-        keep_ee = ~((e_ok[ee[:, 0]] & e_ok[ee[:, 1]]) | np.isin(ee_keys, self._touching[0]))
-        keep_fv = ~((f_ok[fv[:, 0]] & v_ok[fv[:, 1]]) | np.isin(fv_keys, self._touching[1]))
+    def _kept(self, ee_keys, fv_keys):
+        """Masks of the edge-edge pairs and face-vertex pairs (their keys (k,) and (l,), :meth:`_keys`) that are
+        neither tolerated nor touching."""
+        keep_ee = ~(np.isin(ee_keys, self.tolerated[0]) | np.isin(ee_keys, self._touching[0]))
+        keep_fv = ~(np.isin(fv_keys, self.tolerated[1]) | np.isin(fv_keys, self._touching[1]))
         return keep_ee, keep_fv
 
     def _pairs(self, c):
