@@ -10,7 +10,7 @@ from posefix.mesh.contact_solver import ContactSettings, ContactSolver
 from posefix.mesh.geometry import face_areas
 from posefix.mesh.primitives import capsule
 from posefix.mesh.topology import grow_rings, vertex_adjacency
-from posefix.mesh.distortion import distortion_summary
+from posefix.mesh.distortion import distortion_summary, face_distortion
 from posefix.mesh.intersections import intersecting_faces, self_intersecting_pairs
 from posefix.mesh.rotations import rotation_exp
 from posefix.verify.contact_finish import FinishSettings
@@ -177,3 +177,43 @@ def test_a_cylinder_bent_150_degrees_is_repaired_without_a_crushed_face():
     assert (face_areas(result.X, F) / face_areas(V, F)).min() > 0.25
     apart = problem.mask & ((result.replaced & CONTACT) == 0)
     assert np.array_equal(result.X[apart], problem.V_tgt[apart])  # V_C exact away from the contacts
+
+
+def _turned(V, angle, joint=-1.0):
+    """``V``'s part beyond x = ``joint`` turned by ``angle`` (rad) about the z axis through (joint, 0, 0)."""
+    c, s = np.cos(angle), np.sin(angle)
+    X = V.copy()
+    beyond = V[:, 0] > joint
+    x, y = V[beyond, 0] - joint, V[beyond, 1]
+    X[beyond, 0], X[beyond, 1] = joint + c * x - s * y, s * x + c * y
+    return X
+
+
+def test_a_finger_whose_path_lines_pass_under_its_neighbour_ends_unstretched():
+    """A finger (capsule A) turns 20 degrees into its neighbour B; V_C is B and A's base. The key frames turn A in
+    its plane; the integrated path lines, built to be caught on the wrong side, first dive under B and then turn,
+    so the integrated pose has A's tip under B and the skin at the base stretched 13x. The elastic finish starts
+    from the tracked key frames (lower elastic energy) and ends within 4x of the target; the positional finish
+    keeps the stretch."""
+    A, FA = capsule(around=12, cap_rings=3, length_rings=24)
+    V, F = np.vstack([A, A + [0.0, 1.4, 0.0]]), np.vstack([FA, FA + len(A)])
+    finger = np.arange(len(V)) < len(A)
+
+    def pose(angle, dive):
+        X = V.copy()
+        X[finger] = _turned(A, angle)
+        X[finger, 2] += dive * np.clip((A[:, 0] + 1.0) / 0.2, 0.0, 1.0)
+        return X
+
+    t = np.linspace(0.0, 1.0, 11)
+    frames = np.stack([pose(np.radians(20.0) * k, 0.0) for k in t])
+    samples = np.stack([pose(np.radians(20.0) * max(0.0, 2 * k - 1), -1.1 * min(1.0, 2 * k)) for k in t])
+    pairs = [self_intersecting_pairs(P, F) for P in (V, frames[-1])]
+    problem = RepairProblem.build(V, frames[-1], F, ~finger | (V[:, 0] < -1.0), pairs)
+    assert len(pairs[1]) and not any(len(self_intersecting_pairs(S, F)) for S in samples)
+    assert face_distortion(samples[-1], frames[-1], F)[0].max() > 10.0
+    elastic = finish_pose(problem, samples, 1.0, ContactSolver(V, F), FinishSettings(), frames)
+    assert elastic.metrics["repaired_new"] == 0 and elastic.metrics["contact_start"] == "tracked"
+    assert face_distortion(elastic.X, frames[-1], F)[0].max() < 4.0
+    positional = finish_pose(problem, samples, 1.0, ContactSolver(V, F), FinishSettings(free_goal="blend"), frames)
+    assert face_distortion(positional.X, frames[-1], F)[0].max() > 10.0
