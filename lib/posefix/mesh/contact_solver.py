@@ -454,6 +454,11 @@ class ContactSolver:
         return ContactResult(X, converged, iterations, self.contact_vertices(C, len(X)), self.min_distance(X, C),
                              time.perf_counter() - t0)
 
+    def elastic_energy(self, X, goal, weights, elastic):
+        """The energy :meth:`compute_elastic` minimizes, less the barrier, at ``X`` (n, 3), float (length^2)."""
+        return _ElasticNewton(self, np.asarray(goal, dtype=np.float64), np.asarray(weights, dtype=np.float64),
+                              elastic, np.zeros(len(X), dtype=bool), self.settings.tolerance).energy(X)
+
     def compute_path(self, start, waypoints, tolerance=None, weights=None):
         """Carry ``start`` through ``waypoints`` in turn, each from where the last one stopped.
 
