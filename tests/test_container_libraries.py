@@ -103,6 +103,10 @@ def test_the_summary_counts_the_same_for_a_container_and_its_obj_files(limb):
 
 @pytest.mark.data
 def test_the_lion_library_as_one_usd_and_one_glb_file_repairs_to_the_folders_counts(tmp_path, lion_run):
+    """Statuses, new, target and reference counts equal the folder's. The repaired pose's total intersecting faces
+    (the reference's own 138 it keeps, and none new) may differ by a few: the elastic finish moves the reference's
+    own intersections with the float32 input (lion-02: 122 folder, 125 usdc, 126 glb; lion-04: 126, 127, 128, when
+    this was written)."""
     usd, glb, names = library_into_containers(shared_library("lion-poses"), tmp_path, "lion")
     counts = {"folder": summary_counts(lion_run, "lion-poses")}
     for library in (usd, glb):  # the summary and the file (not the figures); one downstream step: no count needs more
@@ -112,7 +116,12 @@ def test_the_lion_library_as_one_usd_and_one_glb_file_repairs_to_the_folders_cou
         assert proc.returncode == 0, (library, proc.stderr[-3000:])
         counts[library.suffix] = summary_counts(run, "lion")
     assert len(counts["folder"]) == len(names) == 9
-    assert counts[".usdc"] == counts["folder"] and counts[".glb"] == counts["folder"], counts
+    for kind in (".usdc", ".glb"):  # statuses and counts as the folder's, but the total of the repaired pose's
+        for (status, faces), (status_folder, faces_folder) in zip(counts[kind], counts["folder"]):
+            assert status == status_folder and faces["repaired_new"] == 0, counts
+            assert {k: v for k, v in faces.items() if k != "repaired"} == \
+                {k: v for k, v in faces_folder.items() if k != "repaired"}, counts
+            assert abs(faces["repaired"] - faces_folder["repaired"]) <= 6, counts  # the reference's own 138
 
 
 def test_changing_one_frame_of_the_file_reruns_only_that_pose(limb):
