@@ -2,17 +2,21 @@
 
 The same prims, names, frames and morph targets as the input; only the repaired poses' positions change (blend
 shapes and morph targets as offsets from the base). Poses without a repaired mesh (not repaired in this run, or
-failed) keep the input's positions and are listed in the log.
+failed) keep the input's positions and are listed in the log. The file is read back: a pose whose rounding to the
+file's float32 would make a face intersect is an error (the contact solver keeps every pair farther apart than that
+rounding, ``ContactSolver.keep_gap``).
 """
 
 import posefix.workflow.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; runtime defaults before numpy)
 import os
+import tempfile
 
 import numpy as np
 
 from posefix.io.containers import open_container
 from posefix.io.errors import InputError
 from posefix.io.meshes import read_mesh
+from posefix.mesh.intersections import intersecting_faces, self_intersecting_pairs
 from posefix.workflow.cli import run_stage, stage_parser
 from posefix.workflow.timings import Timings
 
@@ -35,15 +39,32 @@ def main(args, log):
         box = open_container(args.container, args.mesh)
         positions = {pose: _repaired(box, os.path.join(args.repaired, f"{pose}.ply"))
                      for pose in filter(None, args.poses.split(","))}
-    with timings.step("write"):
-        box.write(args.out, positions)
-    back = open_container(args.out, box.mesh)
-    for pose, X in positions.items():  # float32 in the file: within its rounding of the repaired positions
-        if not np.allclose(back.points(pose), X, rtol=0, atol=1e-6 * (1 + np.abs(X).max())):
-            raise InputError(args.out, f"{back.where(pose)} did not read back as written")
+    with timings.step("write"), tempfile.TemporaryDirectory(dir=os.path.dirname(os.path.abspath(args.out))) as tmp:
+        written = os.path.join(tmp, os.path.basename(args.out))  # the same name: a container names poses by it
+        box.write(written, positions)
+        back = open_container(written, box.mesh)
+        for pose, X in positions.items():
+            _check_read_back(args.out, back, pose, X)
+        os.replace(written, args.out)
     kept = [m for m in box.members if m not in positions and m != box.rest]
     log.info("wrote %s: %d poses repaired%s", args.out, len(positions),
              f", {len(kept)} as in the input ({', '.join(kept[:5])}{' ...' if len(kept) > 5 else ''})" if kept else "")
+
+
+def _check_read_back(out, back, pose, X):
+    """InputError unless ``pose`` of the written container ``back`` (at ``out``) holds ``X`` (n, 3) up to its
+    rounding (float32) and that rounding made no face intersect (the exact detector on the file as read back)."""
+    P = back.points(pose)
+    if not np.allclose(P, X, rtol=0, atol=1e-6 * (1 + np.abs(X).max())):
+        raise InputError(out, f"{back.where(pose)} did not read back as written")
+    if np.array_equal(P, X):
+        return
+    m = len(back.faces)
+    new = (intersecting_faces(self_intersecting_pairs(P, back.faces), m)
+           & ~intersecting_faces(self_intersecting_pairs(X, back.faces), m))
+    if new.any():
+        raise InputError(out, f"{back.where(pose)}: rounded to the file's float32, {new.sum()} faces intersect that "
+                              "do not in the repaired mesh")
 
 
 def _repaired(box, path):

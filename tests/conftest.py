@@ -60,6 +60,17 @@ def smooth_field_problem(n=2000, seed=0):
     return Y, V
 
 
+def float32_crossing():
+    """Two triangles whose faces intersect once their positions are rounded to float32: ``(V_ref, X, F)``, the
+    reference (apart) and the pose (triangle B's corner 2e-8 above triangle A, coordinates about 1: their float32
+    spacing is 1.2e-7), (6, 3) float64 each, and F (2, 3). A is float32-exact."""
+    normal = np.array([1.0, 0.0, 1.0]) / np.sqrt(2.0)
+    A = np.array([[0.5, -1.0, 1.5], [1.5, -1.0, 0.5], [1.0, 1.0, 1.0]])  # in the plane x + z = 2
+    corner = np.array([1.07744149870135782, 0.1, 0.92255850129864218]) + 2e-8 * normal
+    B = np.array([corner, corner + [0.3, 0.3, 0.3] + 0.3 * normal, corner + [-0.3, 0.3, 0.3] + 0.5 * normal])
+    return np.vstack([A, B + 0.5 * normal]), np.vstack([A, B]), np.array([[0, 1, 2], [3, 4, 5]])
+
+
 def pixels(fig):
     """The RGB pixels (h, w, 3) of a matplotlib figure drawn as PNG."""
     from matplotlib.image import imread

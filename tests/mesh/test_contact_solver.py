@@ -3,6 +3,7 @@ import pytest
 import scipy.sparse as sp
 import trimesh
 
+from conftest import float32_crossing
 from posefix.mesh.contact_solver import ContactSettings, ContactSolver
 from posefix.mesh.intersections import intersecting_faces, self_intersecting_pairs
 from posefix.mesh.rotations import rotation_exp
@@ -178,3 +179,18 @@ def test_a_start_in_contact_is_refused():
     V[len(V) // 2 + np.argmin(V[len(V) // 2:, 0])] = 0.0
     with pytest.raises(ValueError, match="not intersection-free"):
         ContactSolver(V, F, settings=ContactSettings(touching=0.0)).compute_pose(V, V, np.ones(len(V)))
+
+
+def test_a_contact_at_the_float32_spacing_keeps_a_gap_that_survives_rounding():
+    """Triangle B's corner 2e-8 above triangle A (coordinates about 1, float32 spacing 1.2e-7): rounded to float32
+    as written, the corner ends on A's other side and the faces intersect; pushed by keep_gap, they stay apart."""
+    from posefix.mesh.rounding import float32_gap
+    V_ref, X, F = float32_crossing()
+    rounded = X.astype(np.float32).astype(np.float64)
+    assert len(self_intersecting_pairs(X, F)) == 0 and len(self_intersecting_pairs(rounded, F)) == 1
+    movable = np.arange(6) >= 3
+    Y, distance = ContactSolver(V_ref, F).keep_gap(X, movable)
+    assert distance >= float32_gap(X)
+    assert np.array_equal(Y[:3], X[:3]) and np.abs(Y - X).max() < 10 * float32_gap(X)
+    assert len(self_intersecting_pairs(Y.astype(np.float32).astype(np.float64), F)) == 0
+    assert np.array_equal(ContactSolver(V_ref, F).keep_gap(Y, movable)[0], Y)  # far enough: unchanged

@@ -56,6 +56,7 @@ def track_keyframes(solver, frames, reference_faces):
     TrackingResult
     """
     result = solver.compute_path(frames[0], frames[1:])
+    result.X, _ = solver.keep_gap(result.X, np.ones(len(result.X), dtype=bool))  # survives rounding to float32
     faces = intersecting_faces(self_intersecting_pairs(result.X, solver.F), len(solver.F))
     new = faces & ~reference_faces
     log.info("contact repair: %d key frames tracked in %d Newton iterations (%s), %d vertices in contact, %d new "

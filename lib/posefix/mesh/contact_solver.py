@@ -35,8 +35,9 @@ import scipy.sparse as sp
 
 from posefix.mesh.geometry import bbox_diagonal, vertex_areas
 from posefix.mesh.laplacian import cotangent_laplacian
+from posefix.mesh.rounding import float32_gap
 from posefix.mesh.sparse import cholesky_factorized, factorized, fill_reducing_order
-from posefix.mesh.tolerances import ROUNDOFF
+from posefix.mesh.tolerances import ROUNDOFF, TINY
 
 log = logging.getLogger(__name__)
 
@@ -45,6 +46,9 @@ _PSD = ipctk.PSDProjectionMethod.CLAMP
 _CCD = ipctk.AdditiveCCD()
 """Additive CCD (Li et al. 2021, conservative advancement): on the lion poses about half the time and two thirds
 of the Newton iterations of Tight-Inclusion CCD (1e-6 tolerance, 1000 iterations), both conservative."""
+
+GAP_STEPS = 8
+"""Pushes of :meth:`ContactSolver.keep_gap` at most (each moves a vertex of a pair closer than the gap by the gap)."""
 
 WAYPOINT_TOLERANCE = 1e-3
 """Newton's stopping step / d on the waypoints of :meth:`ContactSolver.compute_path` (all but the last)."""
@@ -329,13 +333,13 @@ class ContactSolver:
         ne, n = self.mesh.num_edges, self.mesh.num_vertices
         return ee.min(axis=1) * ne + ee.max(axis=1), fv[:, 0] * n + fv[:, 1]
 
-    def collisions(self, X, candidates=None):
-        """The barrier's active pairs (closer than ``dhat``) at ``X``, tolerated pairs excluded: a list of
-        ipctk.NormalCollisions, one per set of :meth:`candidates`."""
+    def collisions(self, X, candidates=None, dhat=None):
+        """The barrier's active pairs (closer than ``dhat``, the solver's by default) at ``X``, tolerated pairs
+        excluded: a list of ipctk.NormalCollisions, one per set of :meth:`candidates`."""
         out = []
         for c in self.candidates(X) if candidates is None else candidates:
             C = ipctk.NormalCollisions()
-            C.build(c, self.mesh, X, self.dhat)
+            C.build(c, self.mesh, X, self.dhat if dhat is None else dhat)
             out.append(C)
         return out
 
@@ -361,6 +365,45 @@ class ContactSolver:
             if step < 1.0:
                 return a + step * (b - a)
         return 1.0
+
+    def keep_gap(self, X, movable):
+        """``X`` with every non-tolerated pair that has a ``movable`` vertex at least :func:`float32_gap` apart.
+
+        A pose written as float32 (USD ``point3f``, glTF) is rounded: two primitives closer than the rounding
+        could end up intersecting in the file. The vertices of the pairs closer than the gap move, up to
+        :data:`GAP_STEPS` times, by the gap along the descent of a barrier whose activation distance is twice the
+        gap, each push bounded by CCD (a few float32 spacings: the shape does not change).
+
+        Parameters
+        ----------
+        X : (n, 3) float
+            Intersection-free positions (up to the tolerated faces).
+        movable : (n,) bool
+            Vertices that may move (e.g. not the constrained vertices exactly on their targets).
+
+        Returns
+        -------
+        X : (n, 3) float
+        distance : float
+            The smallest distance left between non-tolerated primitives closer than twice the gap (``inf`` if
+            none); below the gap only where no vertex of the pair is ``movable``.
+        """
+        gap = float32_gap(X)
+        barrier, pushes = ipctk.BarrierPotential(2.0 * gap, 1.0), 0
+        for pushes in range(GAP_STEPS + 1):
+            close = [C for C in self.collisions(X, self.candidates(X, inflation=gap), 2.0 * gap) if len(C)]
+            distance = min((np.sqrt(C.compute_minimum_distance(self.mesh, X)) for C in close), default=np.inf)
+            g = sum((barrier.gradient(C, self.mesh, X) for C in close), np.zeros(X.size)).reshape(-1, 3)
+            g[~np.asarray(movable, dtype=bool)] = 0.0
+            norm = np.linalg.norm(g, axis=1)
+            if distance >= gap or not norm.any() or pushes == GAP_STEPS:
+                break
+            push = -gap * g / np.maximum(norm, TINY)[:, None]
+            X = X + self.collision_free_step(X, X + push) * push
+        if pushes:
+            log.info("contact solver: %d pushes toward a gap of %.1e d (float32 rounding), %.1e d left", pushes,
+                     gap / self.d, distance / self.d)
+        return X, float(distance)
 
     def contact_vertices(self, collisions, n):
         """Vertices of the pairs of ``collisions`` (a list of ipctk.NormalCollisions), (n,) bool."""

@@ -163,6 +163,7 @@ def contact_finish(problem, solver, samples, settings=FinishSettings(), frames=N
         X, exact = _exact_constrained(problem, solver, X, result.contact, locked & ~exact)
     if (locked & ~exact).any():
         result, X, exact = _released(problem, solver, result, X, motion, settings.constrained_weight)
+    X, _ = solver.keep_gap(X, ~exact)  # a file of float32 positions rounds them: no pair so close that it crosses
     pairs = self_intersecting_pairs(X, problem.F)
     reverted = bool((intersecting_faces(pairs, len(problem.F)) & ~problem.reference_faces).any())
     if reverted:

@@ -96,3 +96,28 @@ def test_the_same_repair_writes_the_same_bytes(tmp_path, sphere):
         (tmp_path / run).mkdir()
         box.write(tmp_path / run / "walk.usdc", {"walk-1": poses[0] * 0.5})
     assert (tmp_path / "a" / "walk.usdc").read_bytes() == (tmp_path / "b" / "walk.usdc").read_bytes()
+
+
+def test_pack_refuses_a_pose_whose_float32_rounding_makes_faces_intersect_and_writes_one_with_a_gap(tmp_path):
+    """Stage pack reads the file back and runs the exact detector: the two triangles of ``float32_crossing`` apart
+    in float64 but crossing once rounded are refused in one line naming the pose; pushed apart by the contact
+    solver's keep_gap (as every contact repair ends), they are written and stay apart in the file."""
+    from conftest import float32_crossing, run_stage
+    from posefix.io.meshes import write_mesh
+    from posefix.mesh.contact_solver import ContactSolver
+    from posefix.mesh.intersections import self_intersecting_pairs
+    V_ref, X, F = float32_crossing()
+    path = write_usd_frames(tmp_path / "pair.usda", V_ref, [V_ref], F)
+    (tmp_path / "repaired").mkdir()
+    write_mesh(tmp_path / "repaired" / "pair-1.ply", X, F)
+    args = ["--container", path, "--repaired", tmp_path / "repaired", "--poses", "pair-1"]
+    (tmp_path / "out").mkdir()
+    proc = run_stage("pack", *args, "--out", tmp_path / "out" / "pair.usda", check=False)
+    assert proc.returncode != 0 and not any((tmp_path / "out").iterdir())
+    assert proc.stderr.strip().splitlines()[-1].endswith(
+        "out/pair.usda: mesh /Character/Body, frame 1: rounded to the file's float32, 2 faces intersect that do not in the "
+        "repaired mesh"), proc.stderr
+    Y, _ = ContactSolver(V_ref, F).keep_gap(X, np.ones(6, dtype=bool))
+    write_mesh(tmp_path / "repaired" / "pair-1.ply", Y, F)
+    run_stage("pack", *args, "--out", tmp_path / "out" / "pair.usda")
+    assert len(self_intersecting_pairs(open_container(tmp_path / "out" / "pair.usda").points("pair-1"), F)) == 0
