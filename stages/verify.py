@@ -67,6 +67,8 @@ def build_parser():
     parser.add_argument("--distortion-limit", type=float, default=finish.distortion_limit,
                         help="elastic finish: the rest state's edge lengths and face areas are the target's within this "
                         "ratio of the reference's (config summary.distortion_limit)")
+    parser.add_argument("--tracked-iterations", type=int, default=finish.tracked_iterations,
+                        help="elastic finish: Newton iterations at most per key frame of the tracked start")
     parser.add_argument("--fallback-eps", type=float, default=defaults.fallback_eps,
                         help="vertices farther than this many eps from their targets have not reached them")
     parser.add_argument("--fallback-fit", type=float, default=defaults.fallback_fit,
@@ -136,7 +138,7 @@ def _finish(args, problem, integrated, fit_attrs, settings):
         return result, asdict(settings)
     contact, contact_params = contact_settings(args)
     finish = FinishSettings(args.free_goal, args.constrained_weight, args.untangle_rings, args.elastic_weight,
-                            args.bending, args.distortion_limit)
+                            args.bending, args.distortion_limit, args.tracked_iterations)
     solver = ContactSolver(problem.V_ref, problem.F, problem.frame_pairs[0], contact, args.threads)
     result = finish_pose(problem, integrated["samples"], d, solver, finish, frames)
     return result, {"finish": "contact"} | asdict(finish) | contact_params

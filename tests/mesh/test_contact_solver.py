@@ -194,3 +194,13 @@ def test_a_contact_at_the_float32_spacing_keeps_a_gap_that_survives_rounding():
     assert np.array_equal(Y[:3], X[:3]) and np.abs(Y - X).max() < 10 * float32_gap(X)
     assert len(self_intersecting_pairs(Y.astype(np.float32).astype(np.float64), F)) == 0
     assert np.array_equal(ContactSolver(V_ref, F).keep_gap(Y, movable)[0], Y)  # far enough: unchanged
+
+
+def test_a_numerically_indefinite_newton_matrix_is_solved_with_its_diagonal_scaled_slightly():
+    """A PSD matrix that Cholesky refuses (singular in floating point, as the barrier's Hessian at a stiffness of
+    1e12 beside goal weights of 1e-6 was on cat-09) is solved with its diagonal scaled by 1 + 1e-12."""
+    from posefix.mesh.contact_solver import _spd_solve
+    H = sp.csc_matrix(np.array([[1.0, 1.0, 0.0], [1.0, 1.0, 0.0], [0.0, 0.0, 1e-6]]))
+    x = _spd_solve(H, np.array([1.0, 1.0, 1e-6]))
+    assert np.allclose(x, [0.5, 0.5, 1.0], rtol=1e-9)
+    assert np.allclose(_spd_solve(sp.csc_matrix(np.diag([2.0, 4.0])), np.array([2.0, 2.0])), [1.0, 0.5], rtol=0)

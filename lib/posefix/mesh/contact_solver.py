@@ -424,7 +424,7 @@ class ContactSolver:
             return sum((self.barrier.gradient(C, self.mesh, X) for C in sets), np.zeros(X.size))
         return sum((self.barrier.hessian(C, self.mesh, X, _PSD) for C in sets), sp.csc_matrix((X.size, X.size)))
 
-    def compute_pose(self, start, goal, weights, tolerance=None, shape=None):
+    def compute_pose(self, start, goal, weights, tolerance=None, shape=None, max_iterations=None):
         """Move ``start`` toward ``goal`` without leaving the intersection-free set.
 
         Parameters
@@ -441,6 +441,8 @@ class ContactSolver:
             The shape the smoothness term keeps: it smooths the displacement from ``shape`` instead of from
             ``goal`` (``goal`` by default), so the result follows ``goal`` above the smoothing length and
             ``shape``'s details below it.
+        max_iterations : int, optional
+            Newton iterations at most (``settings.max_iterations`` by default).
 
         Returns
         -------
@@ -457,7 +459,7 @@ class ContactSolver:
         if shape is not None:  # 1/2 |x - g|_W^2 + 1/2 |x - s|_S^2 = 1/2 |x - Q^-1 (W g + S s)|_Q^2 + const
             mass, smooth = self._smoothness
             newton.goal = newton.system.solve_q((weights * mass)[:, None] * newton.goal + smooth @ shape)
-        X, converged, iterations = newton.run(np.array(start, dtype=np.float64))
+        X, converged, iterations = newton.run(np.array(start, dtype=np.float64), max_iterations)
         C = self.collisions(X)
         return ContactResult(X, converged, iterations, self.contact_vertices(C, len(X)), self.min_distance(X, C),
                              time.perf_counter() - t0)
@@ -502,7 +504,7 @@ class ContactSolver:
         return _ElasticNewton(self, np.asarray(goal, dtype=np.float64), np.asarray(weights, dtype=np.float64),
                               elastic, np.zeros(len(X), dtype=bool), self.settings.tolerance).energy(X)
 
-    def compute_path(self, start, waypoints, tolerance=None, weights=None):
+    def compute_path(self, start, waypoints, tolerance=None, weights=None, max_iterations=None):
         """Carry ``start`` through ``waypoints`` in turn, each from where the last one stopped.
 
         Parameters
@@ -515,6 +517,8 @@ class ContactSolver:
             Newton's stopping step / d on the last waypoint (``settings.tolerance`` by default).
         weights : (n,) float, optional
             Per-vertex weights of the waypoints (uniform by default).
+        max_iterations : int, optional
+            Newton iterations at most per waypoint (``settings.max_iterations`` by default).
 
         Returns
         -------
@@ -526,7 +530,8 @@ class ContactSolver:
         iterations, converged, seconds = 0, True, 0.0
         for k, goal in enumerate(waypoints):
             last = k == len(waypoints) - 1
-            result = self.compute_pose(X, goal, weights, tolerance if last else WAYPOINT_TOLERANCE)
+            result = self.compute_pose(X, goal, weights, tolerance if last else WAYPOINT_TOLERANCE,
+                                       max_iterations=max_iterations)
             X, iterations, seconds = result.X, iterations + result.iterations, seconds + result.seconds
             converged &= result.converged
             log.debug("waypoint %d of %d: %d Newton iterations", k + 1, len(waypoints), result.iterations)
@@ -630,14 +635,15 @@ class _Newton:
         self.kappa = None
         self.kappa_max = None
 
-    def run(self, X):
+    def run(self, X, max_iterations=None):
         s = self.s
+        most = s.settings.max_iterations if max_iterations is None else max_iterations
         C = s.collisions(X)
         if s.min_distance(X, C) <= 0.0:
             raise ValueError("the start has non-tolerated primitives in contact (it is not intersection-free)")
         self._init_stiffness(X, C)
         previous = s.min_distance(X, C)
-        for it in range(1, s.settings.max_iterations + 1):
+        for it in range(1, most + 1):
             dx = self._direction(X, C)
             X_new, C_new, ok = self._line_search(X, dx, C)
             if not ok:
@@ -652,7 +658,7 @@ class _Newton:
                 self.kappa = ipctk.update_barrier_stiffness(previous ** 2 if np.isfinite(previous) else s.dhat ** 2,
                                                             current ** 2, self.kappa_max, self.kappa, s.d)
             previous = current
-        return X, False, s.settings.max_iterations
+        return X, False, most
 
     def _init_stiffness(self, X, C):
         """IPC's initial barrier stiffness and its cap, from the gradients at ``X`` and :meth:`_mass`."""
@@ -761,5 +767,23 @@ class _ElasticNewton(_Newton):
         if sp.issparse(Hb) and Hb.nnz:
             H = H + self.kappa * sp.csr_matrix(Hb)[self.dofs][:, self.dofs]
         dx = np.zeros(X.size)
-        dx[self.dofs] = cholesky_factorized(H).solve(-grad[self.dofs])
+        dx[self.dofs] = _spd_solve(H, -grad[self.dofs])
         return dx.reshape(-1, 3)
+
+
+def _spd_solve(H, b):
+    """``H^-1 b`` for the PSD Newton matrix ``H`` (sparse (k, k), positive diagonal), by Cholesky. Where rounding
+    makes it numerically indefinite (the barrier's PSD-projected Hessian times a stiffness of 1e12 beside goal
+    weights of 1e-6: cat-09), its diagonal is scaled by ``1 + tau``, ``tau`` from ``ROUNDOFF`` tenfold until it
+    factorizes (each unknown damped relative to its own curvature, as Levenberg-Marquardt's scaled damping)."""
+    try:
+        return cholesky_factorized(H).solve(b)
+    except np.linalg.LinAlgError:
+        tau, D = ROUNDOFF, sp.diags(H.diagonal())
+        while True:
+            try:
+                x = cholesky_factorized(H + tau * D).solve(b)
+                log.debug("Newton matrix's diagonal scaled by 1 + %.0e to factorize", tau)
+                return x
+            except np.linalg.LinAlgError:
+                tau *= 10.0
