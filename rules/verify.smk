@@ -12,7 +12,6 @@ rule verify:
     params:
         options=config_flags(config["verify"]),
         contact=config_flags(config["contact"]),
-        limit=config["summary"]["distortion_limit"],
         script=stage_script("verify"),
         code=stage_code("verify"),
     threads: config["verify"]["threads"]
@@ -27,7 +26,7 @@ rule verify:
     shell:
         "python {params.script:q} --keyframes {input.keyframes:q} --classify {input.classify:q}"
         " --integrate {input.integrate:q} --fit {input.fit:q} {params.options} {params.contact}"
-        " --distortion-limit {params.limit} --threads {threads} --out {output:q} --log {log:q}"
+        " --threads {threads} --out {output:q} --log {log:q}"
 
 
 rule export:

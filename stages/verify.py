@@ -64,9 +64,9 @@ def build_parser():
                         help="elastic finish: weight of the free region's pull toward the target (the elastic energy's is 1)")
     parser.add_argument("--bending", type=float, default=finish.bending,
                         help="elastic finish: bending stiffness k_b of the shell (stretching's and areas' are 1)")
-    parser.add_argument("--distortion-limit", type=float, default=finish.distortion_limit,
+    parser.add_argument("--rest-limit", type=float, default=finish.rest_limit,
                         help="elastic finish: the rest state's edge lengths and face areas are the target's within this "
-                        "ratio of the reference's (config summary.distortion_limit)")
+                        "ratio of the reference's (below summary.distortion_limit, where a face counts as distorted)")
     parser.add_argument("--tracked-iterations", type=int, default=finish.tracked_iterations,
                         help="elastic finish: Newton iterations at most per key frame of the tracked start")
     parser.add_argument("--fallback-eps", type=float, default=defaults.fallback_eps,
@@ -138,7 +138,7 @@ def _finish(args, problem, integrated, fit_attrs, settings):
         return result, asdict(settings)
     contact, contact_params = contact_settings(args)
     finish = FinishSettings(args.free_goal, args.constrained_weight, args.untangle_rings, args.elastic_weight,
-                            args.bending, args.distortion_limit, args.tracked_iterations)
+                            args.bending, args.rest_limit, args.tracked_iterations)
     solver = ContactSolver(problem.V_ref, problem.F, problem.frame_pairs[0], contact, args.threads)
     result = finish_pose(problem, integrated["samples"], d, solver, finish, frames)
     return result, {"finish": "contact"} | asdict(finish) | contact_params

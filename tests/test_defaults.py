@@ -75,11 +75,9 @@ LIBRARY = {
                           (OpenCLIntegrator.integrate, "h0", None)],
     ("integrate", "vec"): [(OpenCLIntegrator, "vec", lambda v: v or 0)],  # None and 0: the device's width
     **{("verify", f.name): [(RepairSettings, f.name, None)] for f in dataclasses.fields(RepairSettings)},
-    **{("verify", f.name): [(FinishSettings, f.name, None)] for f in dataclasses.fields(FinishSettings)
-       if f.name != "distortion_limit"},
+    **{("verify", f.name): [(FinishSettings, f.name, None)] for f in dataclasses.fields(FinishSettings)},
     **{("contact", f.name): [(ContactSettings, f.name, None)] for f in dataclasses.fields(ContactSettings)},
-    ("summary", "distortion_limit"): [(distortion_summary, "limit", None),
-                                      (FinishSettings, "distortion_limit", None)],
+    ("summary", "distortion_limit"): [(distortion_summary, "limit", None)],
     ("downstream", "alphas"): [(downstream_check, "alphas", list)],
     ("downstream", "k_bend"): [(downstream_check, "k_bend", list)],
     ("downstream", "k_stretch"): [(downstream_check, "k_stretch", None), (deform_towards, "k_stretch", None),
@@ -139,7 +137,7 @@ WORKFLOW_ONLY = {("demo", "folder"), ("classify", "exclude"), ("integrate", "dev
 repair_volumetric.tet_vertices goes to stage tet_mesh (its library default is checked in LIBRARY)."""
 
 
-SECTION_STAGES = {"contact": ["verify", "repair_contact"], "summary": ["summary", "render", "verify"]}
+SECTION_STAGES = {"contact": ["verify", "repair_contact"], "summary": ["summary", "render"]}
 """Config sections read by other stages than the one of their name."""
 
 
