@@ -219,3 +219,39 @@ def test_a_finger_whose_path_lines_pass_under_its_neighbour_ends_unstretched():
     assert abs(elastic.X[finger & (V[:, 0] > 2.0), 2].mean()) < 0.1  # the tip beside B, not under it
     positional = finish_pose(problem, samples, 1.0, ContactSolver(V, F), FinishSettings(free_goal="blend"), frames)
     assert face_distortion(positional.X, frames[-1], F)[0].max() > 10.0
+
+
+def test_each_free_region_starts_from_the_candidate_of_lower_energy():
+    """Two fingers, far apart, each turning 20 degrees into its neighbour (V_C: the neighbours and the bases). The
+    first finger's path lines dive under its neighbour (the tracked key frames do not); the second's key frames
+    dive, and its path lines turn a quarter of the way (5 degrees), beside the neighbour. Each free region (a fingertip) starts from the candidate where it is not caught:
+    the start is the tracked one with the second region integrated, and both tips end beside their neighbours,
+    within 4x of the target."""
+    A, FA = capsule(around=12, cap_rings=3, length_rings=24)
+    V = np.vstack([A, A + [0.0, 1.4, 0.0], A + [0.0, 0.0, 10.0], A + [0.0, 1.4, 10.0]])
+    F = np.vstack([FA + k * len(A) for k in range(4)])
+    fingers = [np.arange(len(V)) // len(A) == k for k in (0, 2)]
+
+    def pose(angles, dives):
+        X = V.copy()
+        for finger, angle, dive in zip(fingers, angles, dives):
+            X[finger] = _turned(V[finger], angle)
+            X[finger, 2] += dive * np.clip((A[:, 0] + 1.0) / 0.2, 0.0, 1.0)
+        return X
+
+    t, turn = np.linspace(0.0, 1.0, 11), np.radians(20.0)
+    caught = [(turn * max(0.0, 2 * k - 1), -1.1 * min(1.0, 2 * k)) for k in t]  # dive, then turn
+    frames = np.stack([pose((turn * k, c[0]), (0.0, c[1])) for k, c in zip(t, caught)])
+    samples = np.stack([pose((c[0], 0.25 * turn * k), (c[1], 0.0)) for k, c in zip(t, caught)])
+    target = pose((turn, turn), (0.0, 0.0))
+    frames[-1] = target
+    pairs = [self_intersecting_pairs(P, F) for P in (V, target)]
+    free = (fingers[0] | fingers[1]) & (np.tile(A[:, 0], 4) >= -1.0)
+    problem = RepairProblem.build(V, target, F, ~free, pairs)
+    assert not any(len(self_intersecting_pairs(S, F)) for S in samples)
+    result = finish_pose(problem, samples, 1.0, ContactSolver(V, F), FinishSettings(), frames)
+    assert result.metrics["repaired_new"] == 0
+    assert result.metrics["contact_start"] == "tracked, 1 of 2 free regions integrated"
+    assert face_distortion(result.X, target, F)[0].max() < 4.0
+    for finger, z in zip(fingers, (0.0, 10.0)):  # each tip beside its neighbour, not under it
+        assert abs(result.X[finger & (np.tile(A[:, 0], 4) > 2.0), 2].mean() - z) < 0.1

@@ -499,10 +499,23 @@ class ContactSolver:
         return ContactResult(X, converged, iterations, self.contact_vertices(C, len(X)), self.min_distance(X, C),
                              time.perf_counter() - t0)
 
-    def elastic_energy(self, X, goal, weights, elastic):
-        """The energy :meth:`compute_elastic` minimizes, less the barrier, at ``X`` (n, 3), float (length^2)."""
-        return _ElasticNewton(self, np.asarray(goal, dtype=np.float64), np.asarray(weights, dtype=np.float64),
-                              elastic, np.zeros(len(X), dtype=bool), self.settings.tolerance).energy(X)
+    def elastic_energy(self, X, goal, weights, elastic, groups=None):
+        """The energy :meth:`compute_elastic` minimizes, less the barrier, at ``X`` (n, 3): float (length^2), or
+        with ``groups`` ((n,) int, -1 for none) its share of each group, (groups.max() + 1,) float: a vertex's goal
+        term and every residual of a group's vertex (the largest group among its vertices)."""
+        newton = _ElasticNewton(self, np.asarray(goal, dtype=np.float64), np.asarray(weights, dtype=np.float64),
+                                elastic, np.zeros(len(X), dtype=bool), self.settings.tolerance)
+        if groups is None:
+            return newton.energy(X)
+        r, J = elastic.residuals(X), sp.coo_matrix(elastic.jacobian(X))
+        row_group = np.full(len(r), -1)
+        np.maximum.at(row_group, J.row, groups[J.col // 3])
+        out = np.zeros(groups.max() + 1)
+        rows, vertices = row_group >= 0, groups >= 0
+        np.add.at(out, row_group[rows], 0.5 * newton.scale * r[rows] ** 2)
+        pull = 0.5 * newton.goal_weights * ((X - newton.goal) ** 2).sum(axis=1)
+        np.add.at(out, groups[vertices], pull[vertices])
+        return out
 
     def compute_path(self, start, waypoints, tolerance=None, weights=None, max_iterations=None):
         """Carry ``start`` through ``waypoints`` in turn, each from where the last one stopped.

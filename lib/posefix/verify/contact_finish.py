@@ -35,6 +35,7 @@ import time
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.sparse.csgraph import connected_components
 
 from posefix.mesh.contact_solver import WAYPOINT_TOLERANCE
 from posefix.mesh.harmonic import biharmonic_extension
@@ -234,24 +235,52 @@ def _start(problem, solver, paths, motion, locked, settings):
 
 def _lower_energy_start(problem, solver, frames, motion, integrated, settings):
     """``(start, label, Newton iterations)``: of the intersection-free candidates, the one of lower energy (the
-    elastic finish's, less the barrier, over the free region: elastic energy and pull toward the target): the
-    integrated one (``integrated``: :func:`_intersection_free_start`'s start, label and iterations) or the key frames
-    ``frames`` (K, n, 3) tracked by the contact solver with V_C weighted ``settings.constrained_weight``, at most
-    ``settings.tracked_iterations`` Newton iterations per key frame (label ``tracked``). An elastic
-    energy cannot pull a region back through a contact, so the start decides on which side of one it ends: where
-    the integrated path lines follow a neighbouring part's motion (a finger caught on the wrong side of the next),
-    the tracked key frames do not; the pull toward the target counts, as a region caught on the wrong side may
-    be as unstretched as one on the right side."""
+    elastic finish's, less the barrier, over the free region: elastic energy and pull toward the target), per
+    connected free region where the exact detector allows (:func:`_regional_start`): the integrated one
+    (``integrated``: :func:`_intersection_free_start`'s start, label and iterations) or the key frames ``frames``
+    (K, n, 3) tracked by the contact solver with V_C weighted ``settings.constrained_weight``, at most
+    ``settings.tracked_iterations`` Newton iterations per key frame (label ``tracked``). An elastic energy cannot
+    pull a region back through a contact, so the start decides on which side of one it ends: where the integrated
+    path lines follow a neighbouring part's motion (a finger caught on the wrong side of the next), the tracked key
+    frames do not; the pull toward the target counts, as a region caught on the wrong side may be as unstretched
+    as one on the right side."""
     X, label, iterations = integrated
     result = solver.compute_path(frames[0], frames[1:], weights=np.where(problem.mask, settings.constrained_weight, 1.0),
                                  max_iterations=settings.tracked_iterations)
     free = np.where(problem.mask, 0.0, motion.free_weight)
-    energies = [solver.elastic_energy(Y, motion.goal, free, motion.elastic) for Y in (X, result.X)]
-    log.info("contact finish: energy of the %s start %.4g, of the tracked key frames %.4g (%d Newton iterations)",
-             label, energies[0], energies[1], result.iterations)
-    if energies[1] < energies[0]:
-        return result.X, "tracked", iterations + result.iterations
-    return X, label, iterations + result.iterations
+    regions = _free_regions(problem)
+    energies = [solver.elastic_energy(Y, motion.goal, free, motion.elastic, regions) for Y in (X, result.X)]
+    log.info("contact finish: energy of the %s start %.4g, of the tracked key frames %.4g (%d Newton iterations, "
+             "%d free regions)", label, energies[0].sum(), energies[1].sum(), result.iterations, len(energies[0]))
+    start, label = _regional_start(problem, solver, (X, label), result.X, energies, regions)
+    return start, label, iterations + result.iterations
+
+
+def _free_regions(problem):
+    """The connected free regions (``~problem.mask``, along the mesh's edges): (n,) int, -1 on V_C."""
+    free = ~problem.mask
+    regions = np.full(len(free), -1)
+    if free.any():
+        regions[free] = connected_components(problem.A[free][:, free], directed=False)[1]
+    return regions
+
+
+def _regional_start(problem, solver, integrated, tracked, energies, regions):
+    """``(start, label)``: the tracked start ``tracked`` (n, 3) with the free regions where the integrated start
+    (``integrated``: positions and label) has the lower energy (``energies``: per region, integrated's and
+    tracked's; ``regions``: :func:`_free_regions`) taken from it, where the result has no new intersecting face (the exact detector) and no
+    non-tolerated pair in contact; else the candidate of lower total energy."""
+    X, label = integrated
+    lower = energies[0] < energies[1]
+    if lower.any() and not lower.all():
+        mixed = tracked.copy()
+        take = (regions >= 0) & lower[regions]
+        mixed[take] = X[take]
+        if not new_faces(problem, mixed).any() and solver.min_distance(mixed) > 0.0:
+            return mixed, f"tracked, {lower.sum()} of {len(lower)} free regions {label}"
+    if energies[1].sum() < energies[0].sum():
+        return tracked, "tracked"
+    return X, label
 
 
 def _motion(problem, X_int, settings):
