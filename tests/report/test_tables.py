@@ -47,6 +47,14 @@ def test_a_contact_finish_that_fell_back_or_did_not_converge_is_never_ok():
         "check", "the contact finish did not converge")
 
 
+def test_the_contact_finish_taking_the_target_where_it_undoes_the_references_intersections_is_ok():
+    finish = {"finish": {"converged": True, "reverted": False}}
+    assert pose_status(_entry("g", fallback=73) | finish) == (
+        "ok", "73 vertices take the target, which undoes the reference's own intersections there")
+    assert pose_status(_entry("g", fallback=73))[0] == "fallback"  # the snap finish's untangling
+    assert pose_status(_entry("h", fallback=30, pass_through=30) | finish)[0] == "fallback"
+
+
 def test_the_page_reads_the_stored_status():
     page = summary_html("lib", [_entry("a") | {"status": {"kind": "check", "reason": "stored"}}])
     assert "check: stored" in page and "0 ok, 0 fallback, 1 check" in page

@@ -21,7 +21,10 @@ def pose_status(entry):
     :data:`DEVIATION_BAR`, a contact finish reverted to the path lines or not converged, a face stretched or crushed
     beyond :data:`posefix.mesh.distortion.SEVERE` or more than :data:`DISTORTED_SHARE` of the faces beyond the
     entry's distortion limit (against both the target and the reference); ``fallback``: regions copied from the
-    target or untangled (the pose is clean but not all of it came from the integration); ``ok`` otherwise.
+    target or untangled (the pose is clean but not all of it came from the integration); ``ok`` otherwise. The
+    contact finish's only copy from the target is where the target undoes the reference's own intersections (the
+    cat's paws, through each other at rest): the target is the right shape there, and the pose is ``ok`` with that
+    reason.
     """
     faces = entry["intersecting_faces"]
     outside = faces["repaired_new"] - faces.get("repaired_new_in_fallback", 0)
@@ -39,6 +42,9 @@ def pose_status(entry):
     if reasons:
         return "check", "; ".join(reasons)
     fallback = entry.get("fallback", {})
+    if entry["fallback_vertices"] > 0 and finish and not fallback.get("pass_through", 0):
+        return "ok", f"{entry['fallback_vertices']} vertices take the target, which undoes the reference's own " \
+                     "intersections there"
     if entry["fallback_vertices"] > 0:
         parts = [f"{fallback.get(k, 0)} {k.replace('_', '-')}" for k in ("pass_through", "new_intersection")
                  if fallback.get(k, 0)]
@@ -285,8 +291,9 @@ def summary_html(library, entries, failed=()):
             f"<h2>posefix summary: {html.escape(library)}</h2>{_failed_html(failed)}"
             "<p><a href='viewer.html'>3D viewer</a> (viewer.html beside this page): every pose's target, repairs and "
             "reference, intersecting faces, deviation heat map.</p>"
-            f"<p>{len(entries)} poses: {tally}. ok: clean and within the deviation bar; fallback: clean, with "
-            f"regions copied from the target or untangled; check: new intersecting faces outside the pass-through "
+            f"<p>{len(entries)} poses: {tally}. ok: clean and within the deviation bar (the contact "
+            "finish taking the target where it undoes the reference's own intersections included); fallback: clean, "
+            "with regions copied from the target or untangled; check: new intersecting faces outside the pass-through "
             f"fallback, a V_C max deviation above {DEVIATION_BAR:g} of the bbox diagonal, a contact finish that fell "
             f"back or did not converge, a face stretched or crushed beyond {SEVERE:g}x or more than "
             f"{100 * DISTORTED_SHARE:g}% of the faces beyond the distortion limit, against both the target and the "
