@@ -170,8 +170,8 @@ def contact_finish(problem, solver, samples, settings=FinishSettings(), frames=N
     if untangled.any():  # contacts with the untangled region have changed: V_C away from the new ones is exact
         result.contact = solver.contact_vertices(solver.collisions(X), len(X))
         X, exact = _exact_constrained(problem, solver, X, result.contact, locked & ~exact)
-    if (locked & ~exact).any():
-        result, X, exact = _released(problem, solver, result, X, motion, settings.constrained_weight)
+    if (locked & ~exact).any() or (untangled.any() and motion.elastic is not None):
+        result, X, exact = _released(problem, solver, result, X, motion, settings.constrained_weight, untangled)
     X, _ = solver.keep_gap(X, ~exact)  # a file of float32 positions rounds them: no pair so close that it crosses
     pairs = self_intersecting_pairs(X, problem.F)
     reverted = bool((intersecting_faces(pairs, len(problem.F)) & ~problem.reference_faces).any())
@@ -334,14 +334,16 @@ def _untangled(problem, X, exact, locked, most):
     return X, exact, none
 
 
-def _released(problem, solver, result, X, motion, weight):
+def _released(problem, solver, result, X, motion, weight, untangled):
     """``(ContactResult, X (n, 3), exact (n,) bool)`` after pulling every constrained vertex with ``weight`` from
     ``X`` as ``motion`` (:func:`_motion`) moves it: where the target's undoing of the reference's own intersections
     could not be taken (:func:`_untangled`), the vertices held back by :func:`_locked_vertices` still go as close to
-    their targets as the barrier lets them (lion-08: V_C max 1.7e-3 d held back, 1.7e-4 d released). Iterations
-    and seconds add up."""
+    their targets as the barrier lets them (lion-08: V_C max 1.7e-3 d held back, 1.7e-4 d released). The elastic
+    finish pins the ``untangled`` (n,) bool vertices on the target too, and its free region relaxes around them
+    (cat-09: the faces between the untangled region and the rest were stretched 6-9x). Iterations and seconds add
+    up."""
     exact = problem.mask & (X == problem.V_tgt).all(axis=1)
-    released = motion.solve(solver, X, problem.mask, weight, None if motion.elastic is None else exact)
+    released = motion.solve(solver, X, problem.mask, weight, None if motion.elastic is None else exact | untangled)
     released.iterations += result.iterations
     released.seconds += result.seconds
     X, exact = _exact_constrained(problem, solver, released.X, released.contact, np.zeros(len(X), dtype=bool))
