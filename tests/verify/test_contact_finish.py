@@ -155,6 +155,27 @@ def test_where_the_target_undoes_the_references_own_intersection_that_region_tak
     assert ((result.replaced & REPLACED_NEW_INTERSECTION) > 0).sum() == untangled
 
 
+def test_the_free_region_beside_an_untangled_region_follows_it_onto_the_target():
+    """A sheet B stands through sheet A in the reference and clear of it in the target (moved 0.8 along x), as
+    above; B's rows between 0.1 and 0.3 above A are free, the rows above them V_C (on the target from the start).
+    The region around the reference's own intersection takes the target's positions after the elastic solve; the
+    free rows, held between it and the top rows until then (0.36 off the target, faces 3.8x stretched), follow it
+    (cat-09: faces 6-9x before the free region relaxed around the untangled one)."""
+    A, FA = grid_sheet(9, 0.0)
+    U, FB = grid_sheet(9, 0.0)
+    B = np.column_stack([np.full(len(U), 0.55), 0.3 + 0.4 * U[:, 0], -0.2 + 0.8 * U[:, 1]])
+    V, F = np.vstack([A, B]), np.vstack([FA, FB + len(A)])
+    target = V + (np.arange(len(V)) >= len(A))[:, None] * [0.8, 0.0, 0.0]
+    pairs = [self_intersecting_pairs(P, F) for P in (V, target)]
+    mask = (V[:, 2] <= 1e-9) | (V[:, 2] >= 0.4 - 1e-9)
+    problem = RepairProblem.build(V, target, F, mask, pairs)
+    result = finish_pose(problem, np.stack([V, V]), 1.0, ContactSolver(V, F, problem.frame_pairs[0]),
+                         FinishSettings())
+    assert result.metrics["repaired_new"] == 0 and result.metrics["contact_untangled"] > 0
+    assert face_distortion(result.X, target, F)[0].max() < 1.5
+    assert np.abs(result.X[~mask] - target[~mask]).max() < 0.01
+
+
 def _bent(V, angle, joint=1.5):
     """``V`` turned by ``angle`` (rad) about the z axis, blended linearly over |x| < ``joint``: an elbow."""
     t = np.clip((V[:, 0] + joint) / (2 * joint), 0.0, 1.0)
