@@ -30,7 +30,7 @@ def pose_row(folder):
     ve, attrs = read_artifact(folder / "verify.h5", "verify", ["repaired"])
     problem = RepairProblem.build(kf["reference"], kf["target"], kf["faces"], cl["mask"],
                                   split_frames(cl["pairs"], cl["pair_offsets"]))
-    solver = ContactSolver(problem.V_ref, problem.F, problem.reference_faces)
+    solver = ContactSolver(problem.V_ref, problem.F, problem.frame_pairs[0])
     X = ve["repaired"]
     contact = solver.contact_vertices(solver.collisions(X), len(X))
     d = solver.d
