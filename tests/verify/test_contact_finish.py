@@ -6,13 +6,14 @@ import numpy as np
 import pytest
 
 from conftest import ROOT, grid_sheet
-from posefix.mesh.contact_solver import ContactSettings, ContactSolver
+from posefix.mesh.contact_solver import ContactResult, ContactSettings, ContactSolver
 from posefix.mesh.geometry import face_areas
 from posefix.mesh.primitives import capsule
 from posefix.mesh.topology import grow_rings, vertex_adjacency
 from posefix.mesh.distortion import distortion_summary, face_distortion
 from posefix.mesh.intersections import intersecting_faces, self_intersecting_pairs
 from posefix.mesh.rotations import rotation_exp
+from posefix.verify import contact_finish as cf
 from posefix.verify.contact_finish import FinishSettings
 from posefix.verify.flags import CONTACT, REPLACED_NEW_INTERSECTION, REPRODUCED
 from posefix.verify.sequence import finish_pose, repair_pose
@@ -277,3 +278,28 @@ def test_each_free_region_starts_from_the_candidate_of_lower_energy():
     assert face_distortion(result.X, target, F)[0].max() < 4.0
     for finger, z in zip(fingers, (0.0, 10.0)):  # each tip beside its neighbour, not under it
         assert abs(result.X[finger & (np.tile(A[:, 0], 4) > 2.0), 2].mean() - z) < 0.2
+
+
+def test_a_free_region_pushed_out_of_shape_is_solved_again_from_the_other_start_and_the_better_kept():
+    """A 9 x 9 sheet, its border V_C, the target the reference. A first result with a free vertex dragged 0.5 off
+    (its faces beyond 10x, as a contact that caught it would leave it) is out of shape; the solve from the other
+    start (the reference) comes back onto the target and is kept, with fewer severe faces. A clean first result
+    is kept against a spiked other start: between results with as many severe faces the lower energy wins."""
+    V, F = grid_sheet(9, 0.0)
+    border = (V[:, 0] % 1.0 == 0.0) | (V[:, 1] % 1.0 == 0.0)
+    problem = RepairProblem.build(V, V, F, border, [self_intersecting_pairs(V, F)] * 2)
+    solver, settings = ContactSolver(V, F), FinishSettings()
+    motion, locked = cf._motion(problem, V, settings), np.zeros(len(V), dtype=bool)
+    spiked = V.copy()
+    spiked[40, 2] += 0.5  # the centre
+    assert cf._out_of_shape(problem, spiked, settings.rest_limit) and not cf._out_of_shape(problem, V, 3.0)
+    first = ContactResult(spiked, True, 7, np.zeros(len(V), dtype=bool), np.inf, 0.0)
+    weights = (border, locked, settings.constrained_weight)
+    result, label = cf._lower_energy_result(problem, solver, motion, (first, "tracked"), (V, "integrated"), weights,
+                                            settings.rest_limit)
+    assert label == "integrated (second start)" and result.iterations >= 7
+    np.testing.assert_allclose(result.X, V, atol=1e-9)
+    clean = ContactResult(V.copy(), True, 1, np.zeros(len(V), dtype=bool), np.inf, 0.0)
+    kept, label = cf._lower_energy_result(problem, solver, motion, (clean, "tracked"), (spiked, "integrated"),
+                                          weights, settings.rest_limit)
+    assert label == "tracked" and np.array_equal(kept.X, V)

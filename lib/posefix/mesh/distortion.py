@@ -10,6 +10,9 @@ from posefix.mesh.geometry import face_areas
 
 SEVERE = 10.0
 """Ratio beyond which a face is severely distorted (:func:`distortion_summary`'s ``faces_severe``)."""
+DISTORTED_SHARE = 1e-3
+"""Share of a mesh's faces beyond a distortion limit above which its shape needs a look (a pose's status; one
+crushed face of 10,000 is noise)."""
 
 
 def _symmetric_ratio(a, b):

@@ -2,14 +2,11 @@
 
 import html
 
-from posefix.mesh.distortion import SEVERE
+from posefix.mesh.distortion import DISTORTED_SHARE, SEVERE
 from posefix.report.contents import TIMED_STAGES
 
 DEVIATION_BAR = 1e-3
 """Constrained-region max deviation / d above which a pose is flagged."""
-DISTORTED_SHARE = 1e-3
-"""Share of the faces beyond the distortion limit above which a pose is flagged (one crushed face of 10,000 is
-noise)."""
 STATUS_COLORS = {"ok": "#d8f0d8", "fallback": "#fff2c6", "check": "#f8d0d0"}
 
 
@@ -19,7 +16,7 @@ def pose_status(entry):
     The summary stage stores it in the entry (``status``, :func:`entry_status` reads it); ``check``: new
     intersecting faces outside the pass-through fallback, a constrained-region max deviation above
     :data:`DEVIATION_BAR`, a contact finish reverted to the path lines or not converged, a face stretched or crushed
-    beyond :data:`posefix.mesh.distortion.SEVERE` or more than :data:`DISTORTED_SHARE` of the faces beyond the
+    beyond :data:`posefix.mesh.distortion.SEVERE` or more than :data:`posefix.mesh.distortion.DISTORTED_SHARE` of the faces beyond the
     entry's distortion limit (against both the target and the reference); ``fallback``: regions copied from the
     target or untangled (the pose is clean but not all of it came from the integration); ``ok`` otherwise. The
     contact finish's only copy from the target is where the target undoes the reference's own intersections (the

@@ -16,7 +16,9 @@ toward its goal, through intersection-free shapes only (:mod:`posefix.mesh.conta
    blended biharmonically into it), the target alone (``target``), or the integrated pose plus the blended
    residual (``integrated``).
 3. **Solve** with ``V_C`` weighted ``constrained_weight`` and the free region ``elastic_weight`` (elastic) or 1
-   (positional); the barrier keeps every new contact open.
+   (positional); the barrier keeps every new contact open. The elastic finish starts from the intersection-free
+   candidate of lower energy (the integrated pose or the key frames tracked, per free region), and solves again
+   from the other where contacts pushed the result's free region out of shape (:func:`_lower_energy_result`).
 4. **Exact V_C**: constrained vertices of no barrier pair are put exactly on their targets where CCD
    allows the (small) move. The constrained vertices of the reference's own intersecting faces (which the
    integrated pose inherits; the target may have undone them) are pulled with the free region's weight, as no
@@ -38,6 +40,7 @@ import numpy as np
 from scipy.sparse.csgraph import connected_components
 
 from posefix.mesh.contact_solver import WAYPOINT_TOLERANCE
+from posefix.mesh.distortion import DISTORTED_SHARE, SEVERE, distorted_faces
 from posefix.mesh.harmonic import biharmonic_extension
 from posefix.mesh.intersections import intersecting_faces, self_intersecting_pairs
 from posefix.mesh.shells import rest_elastic_energy
@@ -164,8 +167,7 @@ def contact_finish(problem, solver, samples, settings=FinishSettings(), frames=N
     """
     t0 = time.perf_counter()
     motion, locked = _motion(problem, samples[-1], settings), _locked_vertices(problem)
-    start, label, tracked, iterations, pinned = _start(problem, solver, (samples, frames), motion, locked, settings)
-    result = motion.solve(solver, start, problem.mask & ~locked, settings.constrained_weight, pinned)
+    result, label, tracked, iterations = _solved(problem, solver, (samples, frames), motion, locked, settings)
     X, exact = _exact_constrained(problem, solver, result.X, result.contact, locked)
     X, exact, untangled = _untangled(problem, X, exact, locked, settings.untangle_rings)
     if untangled.any():  # contacts with the untangled region have changed: V_C away from the new ones is exact
@@ -193,6 +195,20 @@ def contact_finish(problem, solver, samples, settings=FinishSettings(), frames=N
                         metrics | {"contact_seconds": time.perf_counter() - t0}, pairs)
 
 
+def _solved(problem, solver, paths, motion, locked, settings):
+    """``(ContactResult, start label, samples tracked, Newton iterations of the start)``: the solve from
+    :func:`_start`'s start (``paths``: samples and key frames), and from the candidate not taken too where contacts
+    pushed the free region out of shape (:func:`_lower_energy_result`)."""
+    start, label, tracked, iterations, other = _start(problem, solver, paths, motion, locked, settings)
+    heavy = problem.mask & ~locked
+    start, pinned = _pinned(problem, solver, start, locked) if motion.elastic is not None else (start, None)
+    result = motion.solve(solver, start, heavy, settings.constrained_weight, pinned)
+    if other is not None and _out_of_shape(problem, result.X, settings.rest_limit):
+        result, label = _lower_energy_result(problem, solver, motion, (result, label), other,
+                                             (heavy, locked, settings.constrained_weight), settings.rest_limit)
+    return result, label, tracked, iterations
+
+
 def new_faces(problem, X):
     """Faces of ``X`` that intersect and do not in the reference, (m,) bool (the exact detector)."""
     F = problem.F
@@ -215,27 +231,73 @@ def _intersection_free_start(problem, solver, samples):
 
 
 def _start(problem, solver, paths, motion, locked, settings):
-    """``(start (n, 3), label, samples tracked, Newton iterations, pinned (n,) bool or None)``.
+    """``(start (n, 3), label, samples tracked, Newton iterations, other)``.
 
     :func:`_intersection_free_start` of the path lines (``paths``: (samples (S, n, 3), key frames (K, n, 3) or
     None)); the elastic finish takes instead the key frames tracked (``settings``: FinishSettings) where their energy
-    is lower (:func:`_lower_energy_start`), and puts the constrained vertices in no barrier pair and not
-    ``locked`` on their targets where CCD allows the move (:func:`_exact_constrained`): those are pinned (not
-    unknowns)."""
+    is lower (:func:`_lower_energy_start`), with the constrained vertices in no barrier pair and not ``locked`` on
+    their targets where CCD allows the move (:func:`_exact_constrained`). ``other``: the candidate not taken
+    (start and label; :func:`_lower_energy_result`), or None."""
     samples, frames = paths
     start, label, tracked, iterations = _intersection_free_start(problem, solver, samples)
-    if motion.elastic is None:
+    if motion.elastic is None or frames is None:
         return start, label, tracked, iterations, None
-    if frames is not None:
-        start, label, iterations = _lower_energy_start(problem, solver, frames, motion, (start, label, iterations),
-                                                       settings)
+    start, label, iterations, other = _lower_energy_start(problem, solver, frames, motion,
+                                                          (start, label, iterations), settings)
+    return start, label, tracked, iterations, other
+
+
+def _pinned(problem, solver, start, locked):
+    """``(start (n, 3), pinned (n,) bool)``: the vertices the elastic finish pins from ``start``, the constrained
+    ones in no barrier pair and not ``locked``, put on their targets where CCD allows (:func:`_exact_constrained`)."""
     contact = solver.contact_vertices(solver.collisions(start), len(start))
-    start, pinned = _exact_constrained(problem, solver, start, contact, locked)
-    return start, label, tracked, iterations, pinned
+    return _exact_constrained(problem, solver, start, contact, locked)
+
+
+def _pushed(problem, X, limit):
+    """Faces of ``X`` (n, 3) with a free vertex beyond ``limit`` (the rest state's bound) against both the target
+    and the reference: contacts pushed them there, (m,) bool."""
+    free = (~problem.mask[problem.F]).any(axis=1)
+    return distorted_faces(X, [problem.V_tgt, problem.V_ref], problem.F, limit) & free
+
+
+def _out_of_shape(problem, X, limit):
+    """Whether contacts pushed the free region of ``X`` (n, 3) out of shape: more than
+    :data:`~posefix.mesh.distortion.DISTORTED_SHARE` of the faces :func:`_pushed` beyond ``limit``, or one beyond
+    :data:`~posefix.mesh.distortion.SEVERE`."""
+    return _pushed(problem, X, limit).sum() > DISTORTED_SHARE * len(problem.F) or _pushed(problem, X, SEVERE).any()
+
+
+def _lower_energy_result(problem, solver, motion, first, other, weights, limit):
+    """``(ContactResult, label)``: of the solve from the start taken (``first``: its result and label) and from the
+    candidate not taken (``other``: start and label), the one with fewer faces pushed beyond
+    :data:`~posefix.mesh.distortion.SEVERE` (:func:`_pushed`), then the one of lower energy (the finish's, less the
+    barrier).
+
+    Each start decides on which side of a contact each part ends (:func:`_lower_energy_start`), and an energy
+    measured at the start cannot tell where a part will catch on another on the way to its target: a lion pose read
+    from a float32 file had a vertex dragged 0.13 d off its target, its edges 46x their length, 4 faces beyond
+    10x, from the start of lower energy; from the other start none, and an energy 11 % higher (tiny faces weigh
+    little in it). Solved when contacts pushed the first result out of shape (:func:`_out_of_shape` beyond
+    ``limit``). ``weights``: (heavy (n,) bool, locked (n,) bool, their weight) as the first solve's. Iterations and
+    seconds add up."""
+    (result, label), (start, other_label) = first, other
+    heavy, locked, weight = weights
+    start, pinned = _pinned(problem, solver, start, locked)
+    second = motion.solve(solver, start, heavy, weight, pinned)
+    goal_weights = np.where(heavy, weight, motion.free_weight)
+    scores = [(int(_pushed(problem, r.X, SEVERE).sum()),
+               solver.elastic_energy(r.X, motion.goal, goal_weights, motion.elastic)) for r in (result, second)]
+    log.info("contact finish: contacts pushed the free region out of shape from the %s start (%d faces beyond "
+             "%gx, energy %.4g); from the %s start %d, %.4g", label, scores[0][0], SEVERE, scores[0][1], other_label,
+             *scores[1])
+    kept, label = (second, f"{other_label} (second start)") if scores[1] < scores[0] else (result, label)
+    kept.iterations, kept.seconds = result.iterations + second.iterations, result.seconds + second.seconds
+    return kept, label
 
 
 def _lower_energy_start(problem, solver, frames, motion, integrated, settings):
-    """``(start, label, Newton iterations)``: of the intersection-free candidates, the one of lower energy (the
+    """``(start, label, Newton iterations, other)``: of the intersection-free candidates, the one of lower energy (the
     elastic finish's, less the barrier, over the free region: elastic energy and pull toward the target), per
     connected free region where the exact detector allows (:func:`_regional_start`): the integrated one
     (``integrated``: :func:`_intersection_free_start`'s start, label and iterations) or the key frames ``frames``
@@ -244,7 +306,8 @@ def _lower_energy_start(problem, solver, frames, motion, integrated, settings):
     pull a region back through a contact, so the start decides on which side of one it ends: where the integrated
     path lines follow a neighbouring part's motion (a finger caught on the wrong side of the next), the tracked key
     frames do not; the pull toward the target counts, as a region caught on the wrong side may be as unstretched
-    as one on the right side."""
+    as one on the right side. ``other``: (start, label) of the whole candidate not taken (the integrated one when
+    the start is mixed)."""
     X, label, iterations = integrated
     result = solver.compute_path(frames[0], frames[1:], weights=np.where(problem.mask, settings.constrained_weight, 1.0),
                                  max_iterations=settings.tracked_iterations)
@@ -253,8 +316,9 @@ def _lower_energy_start(problem, solver, frames, motion, integrated, settings):
     energies = [solver.elastic_energy(Y, motion.goal, free, motion.elastic, regions) for Y in (X, result.X)]
     log.info("contact finish: energy of the %s start %.4g, of the tracked key frames %.4g (%d Newton iterations, "
              "%d free regions)", label, energies[0].sum(), energies[1].sum(), result.iterations, len(energies[0]))
-    start, label = _regional_start(problem, solver, (X, label), result.X, energies, regions)
-    return start, label, iterations + result.iterations
+    start, taken = _regional_start(problem, solver, (X, label), result.X, energies, regions)
+    other = (X, label) if taken.startswith("tracked") else (result.X, "tracked")
+    return start, taken, iterations + result.iterations, other
 
 
 def _free_regions(problem):
