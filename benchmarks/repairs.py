@@ -132,7 +132,17 @@ def method_rows(elastic, positional):
                                   "gn": gauss_newton(b["downstream"], name) if "downstream" in b else None}
                                  for b in (e["baselines"][name] for e in elastic)])
     rows["target"] = {"gn": np.sum([gauss_newton(e["downstream"], "original") for e in elastic], axis=0).tolist()}
+    for finish, entries in zip(REPAIRS[:2], (elastic, positional)):
+        rows[finish]["stretched_where_peer_not"] = stretched_where_peer_is_not(entries, elastic)
     return rows
+
+
+def stretched_where_peer_is_not(entries, peer_entries, limit=4.0):
+    """Poses whose repair has a face with an edge ratio beyond ``limit`` against both the target and the
+    reference (``edge_nearest``) where the contact peer's repair of the same pose has none (int)."""
+    peer = {e["pose"]: e["baselines"]["contact"].get("distortion") for e in peer_entries}
+    return sum(1 for e in entries if e.get("distortion") and peer.get(e["pose"])
+               and e["distortion"]["edge_nearest"] > limit >= peer[e["pose"]]["edge_nearest"])
 
 
 def _s0_row(e):
@@ -153,6 +163,7 @@ def _aggregate(rows):
             "free_mean": float(np.mean([d["free_mean"] for d in dev])),
             "free_max": float(max(d["free_max"] for d in dev)),
             "edge": float(max(d["edge_target"] for d in dist)) if dist else None,
+            "edge_nearest": float(max(d["edge_nearest"] for d in dist)) if dist else None,
             "area": float(max(d["area_target"] for d in dist)) if dist else None,
             "distorted": sum(d["faces_over"] for d in dist) if dist else None,
             "gn": np.sum(gn, axis=0).tolist() if len(gn) == len(rows) else None,
@@ -167,19 +178,23 @@ def markdown(result):
              f"`summary-<library>{SUFFIX}.md`." + (" Downstream check: one setting (alpha 1, k_b 1e-2)."
                                                       if result["quick_downstream"] else ""), "",
              "| library | repair | poses | 0 new faces | new faces (all poses) | ok | "
-             "V_C dev. mean (mean over poses) | V_C max | free mean | free max | worst edge / area ratio | distorted "
+             "V_C dev. mean (mean over poses) | V_C max | free mean | free max | worst edge / area ratio | worst edge ratio, "
+             "target or reference | poses beyond 4 where the peer is not | distorted "
              "faces | GN converged / runs | GN iterations (all runs) | seconds per pose |",
-             "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---|---:|---:|---:|---:|"]
+             "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---|---:|---:|---:|---:|---:|---:|"]
     for name, r in result["libraries"].items():
         for method in REPAIRS:
             lines.append(_markdown_row(name, method, r[method]))
         t = r["target"]["gn"]
-        lines.append(f"| {name} | (target, unrepaired) | | | | | | | | | | | {t[0]} / {t[1]} | {t[2]} | |")
+        lines.append(f"| {name} | (target, unrepaired) | | | | | | | | | | | | | {t[0]} / {t[1]} | {t[2]} | |")
     lines += ["", "Deviations are from the target, relative to the reference's bbox diagonal, over S0's V_C (classify) "
                   "and the other (free) vertices. ok: the report's status (no new intersecting face outside the "
                   "pass-through regions, V_C max within 1e-3, a converged finish, no face beyond 10x and at most 0.1% "
                   "beyond the distortion limit; S0 only). Ratios: the worst "
-                  "edge-length and face-area ratio (or its inverse) against the target over all poses; distorted: "
+                  "edge-length and face-area ratio (or its inverse) against the target over all poses; target or "
+                  "reference: the worst face's edge ratio against the nearer of the two (a face the target crushes "
+                  "and a repair keeps near the reference is not stretched); poses beyond 4 where the peer is not: "
+                  "S0's poses with an edge ratio beyond 4 against both where the contact repair's has none; distorted: "
                   "faces beyond config summary.distortion_limit against both the target and the reference. GN: the "
                   "downstream Gauss-Newton check (S0 §5) over config downstream's grid towards each pose. Seconds: "
                   "wall seconds of the stages per pose (S0: keyframes to verify; a baseline: its repair stage), "
@@ -193,6 +208,8 @@ def markdown(result):
 def _markdown_row(library, method, m):
     gn = f"{m['gn'][0]} / {m['gn'][1]} | {m['gn'][2]}" if m["gn"] else "- | -"
     ratios = f"{m['edge']:.3g} / {m['area']:.3g}" if m["edge"] is not None else "-"
+    ratios += f" | {m['edge_nearest']:.3g}" if m.get("edge_nearest") is not None else " | -"
+    ratios += f" | {m.get('stretched_where_peer_not', '-')}"
     return (f"| {library} | {method} | {m['poses']} | {m['clean']} | {m['new_faces']} | "
             f"{'-' if m['ok'] is None else m['ok']} | {m['vc_mean']:.1e} | {m['vc_max']:.1e} | {m['free_mean']:.1e} | "
             f"{m['free_max']:.1e} | {ratios} | {'-' if m['distorted'] is None else m['distorted']} | {gn} | "

@@ -154,7 +154,8 @@ def test_summary_and_overview_stages_compare_the_baseline(tmp_path):
     assert medial["deviation"]["free_max"] == pytest.approx(0.2) and medial["seconds"] == 2.5
     assert medial["downstream"]["alphas"]["1"]["medial"]["converged"] == [True, False]
     assert entry["distortion"] == {"edge_target": 1.0, "area_target": 1.0, "edge_reference": 1.0,
-                                   "area_reference": 1.0, "faces_over": 0, "faces_severe": 0, "limit": 4.0}  # S0's repair: the target
+                                   "area_reference": 1.0, "edge_nearest": 1.0, "faces_over": 0, "faces_severe": 0,
+                                   "limit": 4.0}  # S0's repair: the target
     assert medial["distortion"]["edge_target"] > 1.0 and medial["distortion"]["limit"] == 4.0
     assert "| p-01 | 1 / 5 | 0.001 / 0.01 |" in (out / "s.md").read_text()
     assert "S0 vs the baseline" not in (out / "plain.md").read_text()

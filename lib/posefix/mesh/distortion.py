@@ -90,13 +90,24 @@ def distortion_summary(X, rests, F, limit=4.0, severe=SEVERE):
     Returns
     -------
     dict
-        ``edge_<name>`` and ``area_<name>``: the worst ratio against each; ``faces_over`` and ``faces_severe``:
-        faces beyond ``limit`` and beyond ``severe`` against every rest shape (:func:`distorted_faces`); ``limit``.
+        ``edge_<name>`` and ``area_<name>``: the worst ratio against each; ``edge_nearest``: the worst over the
+        faces of the edge ratio against the rest shape nearer to the face (a face the target crushes and the
+        repair keeps near the reference is not stretched); ``faces_over`` and ``faces_severe``: faces beyond
+        ``limit`` and beyond ``severe`` against every rest shape (:func:`distorted_faces`); ``limit``.
+
+    Examples
+    --------
+    >>> V = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0]]); F = np.array([[0, 1, 2]])
+    >>> s = distortion_summary(V * [5.0, 1, 1], {"target": V * [6.0, 1, 1], "reference": V}, F)
+    >>> round(s["edge_target"], 3), s["edge_reference"], round(s["edge_nearest"], 3)
+    (1.2, 5.0, 1.2)
     """
-    out = {}
+    out, nearest = {}, np.full(len(F), np.inf)
     for name, V in rests.items():
         edge, area = face_distortion(X, V, F)
         out[f"edge_{name}"], out[f"area_{name}"] = float(edge.max(initial=1.0)), float(area.max(initial=1.0))
+        nearest = np.minimum(nearest, edge)
+    out["edge_nearest"] = float(nearest.max(initial=1.0))
     out["faces_over"] = int(distorted_faces(X, list(rests.values()), F, limit).sum())
     out["faces_severe"] = int(distorted_faces(X, list(rests.values()), F, severe).sum())
     return out | {"limit": float(limit)}
