@@ -180,6 +180,14 @@ class ShellEnergy:
         r = self.residuals(V)
         return float(r @ r)
 
+    def restricted(self, moving):
+        """The terms with a vertex in ``moving`` ((n,) bool): the same energy up to a constant, and the same
+        gradient and Hessian over those vertices, while the others stay put."""
+        H = self.hinges
+        e, h = moving[H.edges].any(axis=1), moving[H.hinges].any(axis=1)
+        return ShellEnergy(Hinges(H.edges[e], H.hinges[h], H.hinge_faces[h]), self.w_stretch[e], self.w_bend[h],
+                           self.length_target[e], self.angle_target[h], self.n, self.log_strain)
+
 
 @dataclass
 class FaceAreaEnergy:
@@ -218,6 +226,11 @@ class FaceAreaEnergy:
         rows = np.repeat(np.arange(len(F)), 9)
         return sp.csr_matrix((values.reshape(-1), (rows, cols)), shape=(len(F), 3 * self.n))
 
+    def restricted(self, moving):
+        """The faces with a vertex in ``moving`` ((n,) bool) (:meth:`ShellEnergy.restricted`)."""
+        f = moving[self.faces].any(axis=1)
+        return FaceAreaEnergy(self.faces[f], self.weights[f], self.area_target[f], self.n)
+
 
 @dataclass
 class ElasticEnergy:
@@ -236,6 +249,20 @@ class ElasticEnergy:
         """Energy ``r . r`` at ``V`` (n, 3) float (dimensionless)."""
         r = self.residuals(V)
         return float(r @ r)
+
+    def restricted(self, moving):
+        """Every term's residuals with a vertex in ``moving`` ((n,) bool): the energy up to a constant while the
+        other vertices stay put, at the cost of the moving region (kids: 9k of 60k vertices move).
+
+        Examples
+        --------
+        >>> V = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0]]); F = np.array([[0, 1, 2], [2, 1, 3]])
+        >>> full = rest_elastic_energy(V, F, V, 4.0, 1.0); part = full.restricted(np.array([0, 0, 0, 1], bool))
+        >>> X = V + [[0, 0, 0], [0, 0, 0], [0, 0, 0], [0.3, -0.2, 0.5]]
+        >>> bool(np.isclose(full.energy(X) - part.energy(X), full.energy(V) - part.energy(V)))
+        True
+        """
+        return ElasticEnergy([t.restricted(moving) for t in self.terms])
 
 
 def shell_energy(V_ref, F, V_example, alpha, k_bend, k_stretch=1.0, hinges=None):
