@@ -102,7 +102,7 @@ def test_the_summary_counts_the_same_for_a_container_and_its_obj_files(limb):
     assert all(c == counts["obj"] for c in counts.values()), counts
 
 
-LION_POSES = ("lion-07", "lion-08", "lion-09")
+FLOAT32_LION_POSES = ("lion-07", "lion-08", "lion-09")
 """The lion poses read from the containers: those whose float32 input once took the finish elsewhere than the
 folder's (usdc lion-8: a free vertex dragged 0.13 d; glb lion-09: 13 faces beyond 4x; lion-07's second start),
 three of nine to keep the two runs short."""
@@ -114,15 +114,15 @@ def test_the_lion_library_as_one_usd_and_one_glb_file_repairs_to_the_folders_cou
     (the reference's own 138 it keeps, and none new) may differ by a few: the elastic finish moves the reference's
     own intersections with the float32 input (lion-02: 122 folder, 125 usdc, 126 glb; lion-04: 126, 127, 128, when
     this was written)."""
-    usd, glb, names = library_into_containers(shared_library("lion-poses"), tmp_path, "lion", LION_POSES)
-    counts = {"folder": summary_counts(lion_run, "lion-poses", LION_POSES)}
+    usd, glb, names = library_into_containers(shared_library("lion-poses"), tmp_path, "lion", FLOAT32_LION_POSES)
+    counts = {"folder": summary_counts(lion_run, "lion-poses", FLOAT32_LION_POSES)}
     for library in (usd, glb):  # the summary and the file (not the figures); one downstream step: no count needs more
         run = tmp_path / library.suffix[1:]
         proc = snakemake(run, "reports/lion/summary.json", f"results/lion/repaired/{library.name}",
                          "--config", f"library={library}", "baselines=[]", "downstream={'max_iters': 1}")
         assert proc.returncode == 0, (library, proc.stderr[-3000:])
         counts[library.suffix] = summary_counts(run, "lion")
-    assert len(counts["folder"]) == len(names) == len(LION_POSES)
+    assert len(counts["folder"]) == len(names) == len(FLOAT32_LION_POSES)
     for kind in (".usdc", ".glb"):  # statuses and counts as the folder's, but the total of the repaired pose's
         for (status, faces), (status_folder, faces_folder) in zip(counts[kind], counts["folder"]):
             assert status == status_folder and faces["repaired_new"] == 0, counts

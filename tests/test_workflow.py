@@ -7,7 +7,7 @@ import h5py
 import numpy as np
 import pytest
 
-from conftest import icosphere, shared_library, snakemake
+from conftest import LION_POSES, icosphere, shared_library, snakemake
 from posefix.workflow.demo import POSES
 from posefix.io.meshes import write_mesh
 
@@ -210,8 +210,7 @@ def test_lion_library(lion_run):
     lib = shared_library("lion-poses")
     results = lion_run / "results" / "lion-poses"
     target_counts = {"lion-01": 465, "lion-04": 717, "lion-07": 903}  # SOURCES.md, independent check
-    for i in range(1, 10):
-        pose = f"lion-{i:02d}"
+    for pose in LION_POSES:
         with h5py.File(results / pose / "classify.h5", "r") as fh:
             counts = fh["intersecting_faces"][()]
             assert counts[0] == 138 and counts[-1] == target_counts.get(pose, counts[-1])
