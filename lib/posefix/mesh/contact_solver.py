@@ -508,7 +508,7 @@ class ContactSolver:
     @contextmanager
     def _moving(self, moving):
         """Within: the broad phase keeps only the pairs with a vertex in ``moving`` ((n,) bool): the others keep
-        their distance, so their barrier is a constant and no step can close them (kids-0001: 51k of 60k
+        their distance, so their barrier is a constant and no step can close them (kids-0001: 48k of 60k
         vertices pinned)."""
         whole = self.mesh.can_collide
         if not moving.all():
