@@ -235,7 +235,7 @@ def main():
     run(sys.executable, ROOT / "benchmarks" / "accuracy.py", "--out", out)
     run(sys.executable, ROOT / "benchmarks" / "scale.py", "--out", out, "--cores", args.cores)
     run(sys.executable, ROOT / "benchmarks" / "downstream.py", "--out", out)  # lion-01, and camel-01 from scale.py
-    run(sys.executable, ROOT / "benchmarks" / "containers.py", "--out", out)
+    run(sys.executable, ROOT / "benchmarks" / "containers.py", "--out", out, "--cores", args.cores)
     note += f" Wall time of the whole benchmark: {(time.perf_counter() - start) / 60:.1f} min."
     (out / "BENCHMARKS.md").write_text(report(info, benchmarks, note.strip(), out))
     (out / "BENCHMARKS.json").write_text(json.dumps({"machine": info, "libraries": benchmarks}, indent=1))

@@ -100,17 +100,15 @@ def write_gltf(path, V_ref, poses, F, names=None, sparse=(), mesh="Body"):
     return path
 
 
-def library_into_containers(folder, out, stem, chosen=None):
-    """The pose library in ``folder`` (a reference ``*-reference.*`` and its poses, or the poses named in
-    ``chosen``) written as ``<stem>.usdc`` (the poses as frames 1, 2, ... after the reference's default points) and
-    ``<stem>.glb`` (morph targets named by the pose files) in ``out``; returns the two paths and the pose names in
-    file order."""
+def library_into_containers(folder, out, stem):
+    """The pose library in ``folder`` (a reference ``*-reference.*`` and its poses) written as ``<stem>.usdc`` (the
+    poses as frames 1, 2, ... after the reference's default points) and ``<stem>.glb`` (morph targets named by the
+    pose files) in ``out`` (benchmarks/containers.py); returns the two paths and the pose names in file order."""
     from posefix.io.library import discover_library
     from posefix.io.meshes import read_mesh
     library = discover_library(folder)
     V_ref, F = read_mesh(library.reference.path)
-    members = [p for p in library.poses if chosen is None or p.name in chosen]
-    poses = [read_mesh(p.path)[0] for p in members]
-    names = [p.name for p in members]
+    poses = [read_mesh(p.path)[0] for p in library.poses]
+    names = [p.name for p in library.poses]
     return (write_usd_frames(out / f"{stem}.usdc", V_ref, poses, F),
             write_gltf(out / f"{stem}.glb", V_ref, poses, F, names), names)
