@@ -368,6 +368,39 @@ class ContactSolver:
                 return a + step * (b - a)
         return 1.0
 
+    def blocked_vertices(self, X0, X1, among=None):
+        """Vertices of the pairs that collide along the straight move ``X0`` -> ``X1`` (n, 3), (n,) bool: the moving
+        vertices of every non-tolerated pair with a vertex in ``among`` ((n,) bool; the moving vertices by default)
+        whose CCD finds an impact. Holding them back, then those of the pairs with a vertex held back, and so on,
+        leaves a move CCD allows.
+
+        Examples
+        --------
+        >>> T = np.array([[0., 0, 0], [1, 0, 0], [0, 1, 0]])
+        >>> V = np.vstack([T, 0.1 * T + [.2, .2, .5], T + 3])  # a triangle, a small one above it, one far away
+        >>> solver = ContactSolver(V, np.arange(9).reshape(3, 3))
+        >>> X1 = V + np.repeat([[0, 0, 0], [0, 0, -1], [0, 0, 1]], 3, axis=0)  # the small one down through the first
+        >>> np.flatnonzero(solver.blocked_vertices(V, X1)).tolist()
+        [3, 4, 5]
+        """
+        moving = (X0 != X1).any(axis=1)
+        blocked = np.zeros(len(X0), dtype=bool)
+        with self._moving(moving if among is None else among):
+            sets = self.candidates(X0, X1)
+        reach = np.linalg.norm(X1 - X0, axis=1)
+        for c in sets:
+            (ee, _), (fv, _) = self._pairs(c)
+            edges, faces = self.mesh.edges[ee].reshape(-1, 4), self.mesh.faces[fv[:, 0]]
+            for ids, split, ccd in ((edges, 2, _CCD.edge_edge_ccd),
+                                    (np.column_stack([fv[:, 1], faces]), 1, _CCD.point_triangle_ccd)):
+                # a pair closes by at most its vertices' moves; Additive CCD reports a pair that closes by 0.9 of
+                # its distance, which is at least its primitives' boxes' (most pairs are left out here)
+                ids = ids[_box_distance(X0, ids, split) <= 2.0 * reach[ids].sum(axis=1)]
+                for k in ids:
+                    if ccd(*X0[k], *X1[k], 0.0, 1.0)[0]:
+                        blocked[k] = True
+        return blocked & moving
+
     def keep_gap(self, X, movable):
         """``X`` with every non-tolerated pair that has a ``movable`` vertex at least :func:`float32_gap` apart.
 
@@ -570,6 +603,14 @@ class ContactSolver:
             log.debug("waypoint %d of %d: %d Newton iterations", k + 1, len(waypoints), result.iterations)
         result.iterations, result.converged, result.seconds = iterations, converged, seconds
         return result
+
+
+def _box_distance(X, stencils, split):
+    """Distance between the bounding boxes of each stencil's two primitives at ``X`` (n, 3), (k,) float: the
+    stencils (k, 4) vertex ids, the first primitive's ``split`` of them (edge-edge 2, point-triangle 1)."""
+    P, Q = X[stencils[:, :split]], X[stencils[:, split:]]
+    gap = np.maximum(P.min(axis=1) - Q.max(axis=1), Q.min(axis=1) - P.max(axis=1))
+    return np.linalg.norm(np.maximum(gap, 0.0), axis=1)
 
 
 def _smoothness(V, F, length):
