@@ -79,7 +79,7 @@ def test_v_c_goes_exactly_onto_its_targets_but_where_its_move_would_collide():
     V, F, _ = _sheets(grid_sheet(9, 0.1)[0])
     target = V + [0.0, 0.0, 1e-3]
     centre = 81 + 40  # the upper sheet's middle vertex, whose target lies under the lower sheet
-    target[centre, 2] = -0.05
+    target[centre, 2] = -0.02  # (a move shorter than the mean edge length: checked pair by pair)
     mask = np.ones(len(V), dtype=bool)
     problem = RepairProblem.build(V, target, F, mask, [np.zeros((0, 2), int)] * 2)
     none = np.zeros(len(V), dtype=bool)
