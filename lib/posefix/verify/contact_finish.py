@@ -442,10 +442,11 @@ def _exact_constrained(problem, solver, X, contact, locked):
     for k in range(EXACT_ROUNDS):
         if solver.collision_free_step(X, Y) == 1.0:
             break
-        if k == 0:  # a move longer than an edge sweeps past too many pairs to check one by one: left to the solve
-            far = np.linalg.norm(Y - X, axis=1) > solver.edge_length
+        far = np.linalg.norm(Y - X, axis=1) > solver.edge_length
+        if k == 0 and far.any():  # a move longer than an edge sweeps past too many pairs to check one by one
             Y[far] = X[far]
             changed = (X != Y).any(axis=1)
+            continue
         blocked = solver.blocked_vertices(X, Y, changed)
         log.info("contact finish: the exact move of %d constrained vertices would touch a contact; %d held back",
                  (X != Y).any(axis=1).sum(), blocked.sum())
