@@ -304,7 +304,8 @@ def test_a_free_region_pushed_out_of_shape_is_solved_again_from_the_other_start_
     """A 9 x 9 sheet, its border V_C, the target the reference. A first result with a free vertex dragged 0.5 off
     (its faces beyond 10x, as a contact that caught it would leave it) is out of shape; the solve from the other
     start (the reference) comes back onto the target and is kept, with fewer severe faces. A clean first result
-    is kept against a spiked other start: between results with as many severe faces the lower energy wins."""
+    is kept against a spiked other start: between results with as many severe faces the lower energy wins, and
+    before it the converged one."""
     V, F = grid_sheet(9, 0.0)
     border = (V[:, 0] % 1.0 == 0.0) | (V[:, 1] % 1.0 == 0.0)
     problem = RepairProblem.build(V, V, F, border, [self_intersecting_pairs(V, F)] * 2)
@@ -323,3 +324,9 @@ def test_a_free_region_pushed_out_of_shape_is_solved_again_from_the_other_start_
     kept, label = cf._lower_energy_result(problem, solver, motion, (clean, "tracked"), (spiked, "integrated"),
                                           weights, settings.rest_limit)
     assert label == "tracked" and np.array_equal(kept.X, V)
+    crept = ContactResult(V.copy(), False, 400, np.zeros(len(V), dtype=bool), np.inf, 0.0)  # the lowest energy, 0
+    bumped = V.copy()
+    bumped[40, 2] += 0.01
+    kept, label = cf._lower_energy_result(problem, solver, motion, (crept, "tracked"), (bumped, "integrated"),
+                                          weights, settings.rest_limit)
+    assert label == "integrated (second start)" and kept.converged  # no severe face either way: converged first
