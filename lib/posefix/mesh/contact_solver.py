@@ -640,7 +640,7 @@ class _NewtonSystem:
 
     def __init__(self, Q, orders):
         self.Q, self.orders = sp.csc_matrix(Q), orders
-        self.H0 = sp.kron(self.Q, sp.identity(3), format="csr")  # (once: 0.5 s a step at 60k vertices)
+        self.H0 = sp.kron(self.Q, sp.identity(3), format="csr")  # once (kids: kron + add 3.9 s, the add 0.014 s)
         p = orders[0]
         self.lu = factorized(self.Q[p][:, p], "NATURAL", symmetric=True)
         self.W, self.count, self.column = np.zeros((0, Q.shape[0])), 0, np.full(Q.shape[0], -1)
