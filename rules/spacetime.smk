@@ -57,7 +57,7 @@ rule constraints:
         keyframes=rules.keyframes.output[0],
         classify=rules.classify.output[0],
     output:
-        f"{RESULTS}/{{pose}}/constraints.h5",
+        intermediate(f"{RESULTS}/{{pose}}/constraints.h5"),
     params:
         options=config_flags(config["constraints"]),
         script=stage_script("constraints"),

@@ -121,6 +121,7 @@ def main(args, log):
                  "max_error_rel": last["max_error"] / d, "rms_error_rel": last["rms_error"] / d,
                  "max_condition": max(r["condition"] for r in fit.history), "bbox_diagonal": d,
                  "tau": float(attrs["metrics"]["tau"]), "samples": int(attrs["metrics"]["samples"]),
+                 "constraints": len(points), "constraint_vertices": int(attrs["metrics"]["constraint_vertices"]),
                  "resumed_iterations": resumed,
                  "seconds": sum(timings.get(k, 0.0) for k in ("start", "iterate"))},
         docs=docs)

@@ -100,7 +100,7 @@ def test_truncate_history_for_other_stopping_rules():
 def _constraints_file(path, n=3000):
     Y, V = smooth_field_problem(n, seed=3)
     write_artifact(path, "constraints", {"points": Y, "values": V}, params={}, inputs=[], timings={},
-                   metrics={"bbox_diagonal": 1.0, "tau": 0.3, "samples": 12})
+                   metrics={"bbox_diagonal": 1.0, "tau": 0.3, "samples": 12, "constraint_vertices": 250})
 
 
 def _fit_args(constraints, out, ckpt):
