@@ -41,6 +41,8 @@ ELASTIC_FINISH = "verify={'finish': 'contact', 'free_goal': 'elastic'}"
 POSITIONAL_FINISH = ("verify={'finish': 'contact', 'free_goal': 'blend'}", "baselines=[]")
 """The second run of a library: S0 with the positional finish, no baselines (they are the first run's)."""
 SUFFIX = "-positional-finish"
+KEEP_INTERMEDIATES = "keep_intermediates=true"
+"""The benchmarks of the fit and of the integrated field's accuracy read each pose's constraints.h5."""
 
 
 def run_library(lib, cores, out, extra=(CHECK_BASELINES,), suffix=""):
@@ -48,7 +50,7 @@ def run_library(lib, cores, out, extra=(CHECK_BASELINES,), suffix=""):
     results under <library><suffix>; its summary entries (its summary.md goes to ``out``)."""
     name = (lib.name if lib else "demo") + suffix
     config = ([f"library={lib}"] if lib else []) + ([f"name={name}"] if suffix else [])
-    cmd = [sys.executable, "-m", "snakemake", "--cores", str(cores), "--config", *config, *extra]
+    cmd = [sys.executable, "-m", "snakemake", "--cores", str(cores), "--config", *config, KEEP_INTERMEDIATES, *extra]
     print("+", " ".join(cmd), flush=True)
     subprocess.run(cmd, cwd=ROOT, check=True)
     shutil.copyfile(ROOT / "reports" / name / "summary.md", out / f"summary-{name}.md")

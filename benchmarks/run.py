@@ -34,7 +34,7 @@ from matplotlib.figure import Figure
 from threadpoolctl import threadpool_info
 
 from posefix.report.tables import downstream_grid_markdown, downstream_markdown
-from repairs import CHECK_BASELINES  # benchmarks/repairs.py, beside this script: the same pipeline call
+from repairs import CHECK_BASELINES, KEEP_INTERMEDIATES  # benchmarks/repairs.py beside: the same pipeline call
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -74,7 +74,7 @@ def bench_library(lib, out, cores):
     name = lib.name if lib else "demo"
     start = time.perf_counter()
     run(sys.executable, "-m", "snakemake", "--cores", cores, "--config", *([f"library={lib}"] if lib else []),
-        CHECK_BASELINES)
+        KEEP_INTERMEDIATES, CHECK_BASELINES)
     pipeline_s = time.perf_counter() - start
     results = ROOT / "results" / name
     pieces = {"pipeline_seconds": pipeline_s,

@@ -68,6 +68,11 @@ onstart:
 CODE = CodeFingerprints(Path(workflow.basedir) / "lib", cache=Path(".snakemake") / "posefix-code.json")
 
 
+def intermediate(path):
+    """``path`` as Snakemake's ``temp()`` unless config ``keep_intermediates``: an artifact only a next stage reads."""
+    return path if config["keep_intermediates"] else temp(path)
+
+
 def stage_code(name):
     """Fingerprint of ``stages/<name>.py`` and the posefix modules it imports (a param of its rule: changed
     code reruns the stage and what depends on it, and nothing else). Each file is read once per run; the jobs

@@ -57,7 +57,7 @@ rule constraints:
         keyframes=rules.keyframes.output[0],
         classify=rules.classify.output[0],
     output:
-        f"{RESULTS}/{{pose}}/constraints.h5",
+        intermediate(f"{RESULTS}/{{pose}}/constraints.h5"),
     params:
         options=config_flags(config["constraints"]),
         script=stage_script("constraints"),
@@ -105,7 +105,6 @@ rule fit:
 rule integrate:
     input:
         fit=rules.fit.output[0],
-        constraints=rules.constraints.output[0],
         keyframes=rules.keyframes.output[0],
     output:
         f"{RESULTS}/{{pose}}/integrate.h5",
@@ -123,5 +122,5 @@ rule integrate:
     conda:
         "../envs/posefix.yaml"
     shell:
-        "python {params.script:q} --fit {input.fit:q} --constraints {input.constraints:q}"
+        "python {params.script:q} --fit {input.fit:q}"
         " --keyframes {input.keyframes:q} {params.options} --threads {threads} --out {output:q} --log {log:q}"

@@ -33,7 +33,6 @@ DOCS = {
     "poly": ("length/time", "quadratic polynomial coefficients (1, z_i, z_i z_j) in normalized coordinates, (15, 3) float64"),
     "shift": ("length", "normalization z = (y - shift) / scale, (4,) float64"),
     "scale": ("length", "normalization scale, () float64"),
-    "residual": ("length/time", "f(y) - c' at every constraint after the last iteration, (N, 3) float64"),
 }
 HISTORY = {
     "centers": ("count", "centres after each iteration, (I,) int64"),
@@ -113,7 +112,7 @@ def main(args, log):
     write_artifact(
         args.out, "fit",
         {"centers": points[fit.order], "center_index": fit.order, "weights": fit.weights, "poly": fit.poly,
-         "shift": fit.shift, "scale": np.float64(fit.scale), "residual": fit.residual, **history},
+         "shift": fit.shift, "scale": np.float64(fit.scale), **history},
         params=_settings_dict(settings) | {"eps_rel": args.eps_rel, "eps_rms_rel": args.eps_rms_rel,
                                            "device": args.device},
         inputs=[args.constraints], timings=timings,
@@ -121,6 +120,8 @@ def main(args, log):
                  "evaluation": fit.evaluator.mode, "device": device_name,
                  "max_error_rel": last["max_error"] / d, "rms_error_rel": last["rms_error"] / d,
                  "max_condition": max(r["condition"] for r in fit.history), "bbox_diagonal": d,
+                 "tau": float(attrs["metrics"]["tau"]), "samples": int(attrs["metrics"]["samples"]),
+                 "constraints": len(points), "constraint_vertices": int(attrs["metrics"]["constraint_vertices"]),
                  "resumed_iterations": resumed,
                  "seconds": sum(timings.get(k, 0.0) for k in ("start", "iterate"))},
         docs=docs)

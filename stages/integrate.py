@@ -28,8 +28,7 @@ DOCS = {
 
 def build_parser():
     parser = stage_parser("integrate", __doc__)
-    parser.add_argument("--fit", required=True, help="fit.h5 of the pose")
-    parser.add_argument("--constraints", required=True, help="constraints.h5 of the pose (tau, sample times)")
+    parser.add_argument("--fit", required=True, help="fit.h5 of the pose (the field, tau, sample count)")
     parser.add_argument("--keyframes", required=True, help="keyframes.h5 of the pose (reference positions)")
     parser.add_argument("--out", required=True, help="integrate.h5 to write")
     parser.add_argument("--device", choices=("auto", "cpu", "gpu", "numpy"), default="auto",
@@ -49,11 +48,10 @@ def main(args, log):
         raise InputError("arguments", "--rtol and --atol-rel must be > 0 and --h0 in (0, 1]")
     timings = Timings()
     with timings.step("read"):
-        fit, _ = read_artifact(args.fit, "fit", ["centers", "weights", "poly", "shift", "scale"])
-        _, cattrs = read_artifact(args.constraints, "constraints", [])
+        fit, fattrs = read_artifact(args.fit, "fit", ["centers", "weights", "poly", "shift", "scale"])
         kf, _ = read_artifact(args.keyframes, "keyframes", ["reference"])
     field = RBFField(fit["centers"], fit["weights"], fit["poly"], fit["shift"], float(fit["scale"]))
-    metrics = cattrs["metrics"]
+    metrics = fattrs["metrics"]
     tau, d, s = float(metrics["tau"]), float(metrics["bbox_diagonal"]), int(metrics["samples"])
     times = np.arange(s + 1) / s
     X0 = kf["reference"]
@@ -74,7 +72,7 @@ def main(args, log):
         args.out, "integrate",
         {"positions": X1, "samples": samples, "sample_times": times, "steps": steps, "rejected": rejected},
         params={"device": args.device, "rtol": args.rtol, "atol_rel": args.atol_rel, "h0": args.h0, "vec": args.vec},
-        inputs=[args.fit, args.constraints, args.keyframes], timings=timings,
+        inputs=[args.fit, args.keyframes], timings=timings,
         metrics={"backend": backend, "device": device_name, "seconds": timings["integrate"],
                  "steps_mean": float(steps.mean()), "steps_max": int(steps.max()),
                  "rejected": int(rejected.sum()), "centers": len(field.weights), "bbox_diagonal": d},

@@ -24,7 +24,7 @@ from posefix.workflow.timings import benchmark_seconds
 from posefix.verify.deviation import deviation
 from posefix.report.summary import DOWNSTREAM_DATASETS, SUMMARY_STAGES, baseline_entry, pose_entry, summary_markdown
 
-METRICS = ("keyframes", "constraints", "fit", "integrate", "verify")
+METRICS = ("keyframes", "fit", "integrate", "verify")
 
 
 def build_parser():

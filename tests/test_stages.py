@@ -65,8 +65,7 @@ def demo_artifacts(tmp_path_factory):
               "--samples", 4, "--out", tmp / "constraints.h5")
     run_stage("fit", "--constraints", tmp / "constraints.h5", "--max-centers", 400, "--batch", 64,
               "--out", tmp / "fit.h5")
-    run_stage("integrate", "--fit", tmp / "fit.h5", "--constraints", tmp / "constraints.h5",
-              "--keyframes", tmp / "keyframes.h5", "--out", tmp / "integrate.h5")
+    run_stage("integrate", "--fit", tmp / "fit.h5", "--keyframes", tmp / "keyframes.h5", "--out", tmp / "integrate.h5")
     run_stage("verify", "--keyframes", tmp / "keyframes.h5", "--classify", tmp / "classify.h5",
               "--integrate", tmp / "integrate.h5", "--fit", tmp / "fit.h5", "--out", tmp / "verify.h5")
     run_stage("downstream", "--keyframes", tmp / "keyframes.h5", "--verify", tmp / "verify.h5", "--alphas", 1.0,
@@ -318,8 +317,8 @@ def test_skeletal_pose_rejects_a_bad_rig_in_one_line(authored, tmp_path):
 
 def test_an_explicit_device_request_is_honoured_or_fails(demo_artifacts, tmp_path):
     from posefix.spacetime.integration_opencl import select_device
-    args = ["--fit", demo_artifacts / "fit.h5", "--constraints", demo_artifacts / "constraints.h5",
-            "--keyframes", demo_artifacts / "keyframes.h5", "--out", tmp_path / "i.h5", "--device", "gpu"]
+    args = ["--fit", demo_artifacts / "fit.h5", "--keyframes", demo_artifacts / "keyframes.h5", "--out",
+            tmp_path / "i.h5", "--device", "gpu"]
     if select_device("gpu")[0] is not None:  # a GPU here: the request is honoured
         run_stage("integrate", *args)
         with h5py.File(tmp_path / "i.h5", "r") as fh:

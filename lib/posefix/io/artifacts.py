@@ -22,7 +22,9 @@ from posefix import __version__
 from posefix.io.errors import InputError
 from posefix.io.files import atomic_path, file_sha256
 
-_COMPRESS_BYTES = 1 << 20
+_COMPRESS_BYTES = 1 << 16
+"""Datasets of this many bytes or more are gzip-compressed (kids-0001: its per-vertex index arrays, 0.5-0.9 MB each,
+were stored raw below the former 1 MiB)."""
 
 
 def config_hash(params):

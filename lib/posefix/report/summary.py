@@ -23,8 +23,8 @@ def pose_entry(pose, metrics, downstream, seconds, baselines=None, distortion=No
     ----------
     pose : str
     metrics : dict of str -> dict
-        The ``metrics`` of the pose's artifacts by stage (``keyframes``, ``constraints``, ``fit``,
-        ``integrate``, ``verify``).
+        The ``metrics`` of the pose's artifacts by stage (``keyframes``, ``fit`` (with the constraints' counts:
+        ``constraints.h5`` is an intermediate), ``integrate``, ``verify``).
     downstream : dict of str -> ndarray
         Datasets of ``downstream.h5`` (:func:`downstream_entry`).
     seconds : dict of str -> float or None
@@ -40,7 +40,7 @@ def pose_entry(pose, metrics, downstream, seconds, baselines=None, distortion=No
     dict
         With its ``status`` (:func:`posefix.report.tables.pose_status`), which every page and the terminal read.
     """
-    kf, co, fi, it, ve = (metrics[s] for s in ("keyframes", "constraints", "fit", "integrate", "verify"))
+    kf, fi, it, ve = (metrics[s] for s in ("keyframes", "fit", "integrate", "verify"))
     entry = _finish_entry(ve) | {
         "pose": pose, "vertices": int(kf["vertices"]), "faces": int(kf["faces"]), "keyframes": int(kf["keyframes"]),
         "intersecting_faces": {
@@ -48,7 +48,7 @@ def pose_entry(pose, metrics, downstream, seconds, baselines=None, distortion=No
             "repaired": int(ve["intersecting_faces_repaired"]), "repaired_new": int(ve["repaired_new"]),
             "repaired_new_in_fallback": int(ve["repaired_new_in_fallback"]),
             "keyframes_max": int(ve["intersecting_faces_keyframes_max"])},
-        "constraint_vertices": int(co["constraint_vertices"]), "constraints": int(co["constraints"]),
+        "constraint_vertices": int(fi["constraint_vertices"]), "constraints": int(fi["constraints"]),
         "fit": {"centers": int(fi["centers"]), "iterations": int(fi["iterations"]), "stop_reason": str(fi["stop_reason"]),
                 "max_error_rel": float(fi["max_error_rel"]), "rms_error_rel": float(fi["rms_error_rel"]),
                 "max_condition": float(fi["max_condition"]), "seconds": float(fi["seconds"])},
