@@ -20,7 +20,8 @@ def _metrics():
         for k in ("constrained_max", "constrained_mean", "constrained_p95", "free_max", "free_mean", "free_p95"):
             verify[f"{prefix}_{k}"] = 1e-3 if prefix == "deviation" else 2e-3
     return {"keyframes": {"vertices": 100, "faces": 196, "keyframes": 11, "bbox_diagonal": 2.0},
-            "fit": {"constraint_vertices": 80, "constraints": 1040, "centers": 400, "iterations": 5, "stop_reason": "eps", "max_error_rel": 1e-4, "rms_error_rel": 1e-5,
+            "fit": {"constraint_vertices": 80, "constraints": 1040,
+                    "centers": 400, "iterations": 5, "stop_reason": "eps", "max_error_rel": 1e-4, "rms_error_rel": 1e-5,
                     "max_condition": 1e7, "seconds": 2.0},
             "integrate": {"backend": "numpy", "device": "numpy (CPU)", "seconds": 1.0, "steps_mean": 12.5,
                           "steps_max": 20},
