@@ -255,6 +255,15 @@ def test_nested_config_overrides_reach_the_stages(tmp_path):
     assert proc.returncode != 0 and "classify.exclude names pose(s) not in the library: demo-9" in proc.stderr
 
 
+def test_constraints_are_an_intermediate_unless_kept(tmp_path):
+    removed = "Would remove temporary output results/demo/demo-01/constraints.h5"
+    proc = snakemake(tmp_path, "-n", "--config", "poses=demo-01", "baselines=[]")
+    assert proc.returncode == 0 and removed in proc.stdout + proc.stderr, proc.stderr[-2000:]
+    proc = snakemake(tmp_path, "-n", "--config", "poses=demo-01", "baselines=[]", "keep_intermediates=true")
+    assert proc.returncode == 0 and "results/demo/demo-01/constraints.h5" in proc.stdout + proc.stderr
+    assert "Would remove temporary output" not in proc.stdout + proc.stderr
+
+
 def test_author_a_library_from_the_demo_rig_and_repair_it(tmp_path):
     """`snakemake skeletal_pose` (S1: the demo rig -> <pose>-ssd/-variational/-flow), then the S0 repair of one of them.
     Called by its name before 2026-12 (`author`), which still works for a release and says the new one."""
