@@ -1,6 +1,8 @@
 """Shared fixtures: paths, the shared pose libraries (skipped when absent), small meshes, stage runner."""
 
+import fcntl
 import io
+import json
 import os
 import subprocess
 import sys
@@ -96,16 +98,38 @@ def snakemake(workdir, *args):
     return subprocess.run(cmd, capture_output=True, text=True, timeout=900)
 
 
+def session_folder(tmp_path_factory):
+    """The session's base temporary folder, shared by pytest-xdist's workers (`make test` runs on ``CORES``
+    processes): each worker's own is a subfolder of it."""
+    base = tmp_path_factory.getbasetemp()
+    return base.parent if os.environ.get("PYTEST_XDIST_WORKER") else base
+
+
+def once_per_session(tmp_path_factory, name, make):
+    """The folder ``name`` in :func:`session_folder`, made by ``make(folder)`` once per session: the first worker
+    to ask makes it, holding a lock; the others wait and share it (read-only). A failed ``make`` is tried again by
+    the next to ask."""
+    base = session_folder(tmp_path_factory)
+    folder, done = base / name, base / f"{name}.done"
+    with open(base / f"{name}.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        if not done.exists():
+            folder.mkdir(exist_ok=True)
+            make(folder)
+            done.touch()
+    return folder
+
+
 @pytest.fixture(scope="session")
 def demo_run(tmp_path_factory):
     """The workflow on the demo library, run locally (``snakemake --cores 2``) once per session: the
     folder it ran in. Read-only for its users (test_workflow, and test_cluster's reference run)."""
-    work = tmp_path_factory.mktemp("demo-run")
-    cmd = [sys.executable, "-m", "snakemake", "-s", str(ROOT / "Snakefile"), "--directory", str(work),
-           "--cores", "2"]
-    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=900)
-    assert proc.returncode == 0, proc.stderr[-3000:]
-    return work
+    def make(work):
+        cmd = [sys.executable, "-m", "snakemake", "-s", str(ROOT / "Snakefile"), "--directory", str(work),
+               "--cores", "2"]
+        proc = subprocess.run(cmd, capture_output=True, text=True, timeout=900)
+        assert proc.returncode == 0, proc.stderr[-3000:]
+    return once_per_session(tmp_path_factory, "demo-run", make)
 
 
 LION_POSES = ("lion-01", "lion-04", "lion-07")
@@ -118,10 +142,11 @@ def lion_run(tmp_path_factory):
     """The workflow on :data:`LION_POSES` of ../shared/data/lion-poses with S0 alone (``baselines=[]``; every pose
     and every repair: make bench), once per session: the folder it ran in (skips when the library is absent)."""
     library = shared_library("lion-poses")
-    work = tmp_path_factory.mktemp("lion-run")
-    proc = snakemake(work, "--config", f"library={library}", "baselines=[]", f"poses={','.join(LION_POSES)}")
-    assert proc.returncode == 0, proc.stderr[-3000:]
-    return work
+
+    def make(work):
+        proc = snakemake(work, "--config", f"library={library}", "baselines=[]", f"poses={','.join(LION_POSES)}")
+        assert proc.returncode == 0, proc.stderr[-3000:]
+    return once_per_session(tmp_path_factory, "lion-run", make)
 
 
 @pytest.fixture(scope="session")
@@ -137,25 +162,42 @@ threadpool_limits(1)
 
 
 def pytest_collection_modifyitems(session, config, items):
-    """Cluster tests last (stable order otherwise): their SLURM run starts with the session, in the
-    background (``cluster_background``), and is mostly waiting, so it overlaps everything else."""
+    """Cluster tests last (stable order otherwise): they wait for the session's SLURM run (:func:`start_cluster`)."""
     items.sort(key=lambda item: item.get_closest_marker("cluster") is not None)
 
 
-@pytest.fixture(scope="session", autouse=True)
-def cluster_background(request, tmp_path_factory):
-    """test_cluster.BackgroundRun, started at the session's start when cluster tests are selected and
-    can run here (else None); stopped (the cluster shut down) at the session's end."""
-    if not any(item.get_closest_marker("cluster") for item in request.session.items):
-        yield None
+def pytest_collection_finish(session):
+    """One process (no xdist): start the SLURM run once the selected tests are known."""
+    if not os.environ.get("PYTEST_XDIST_WORKER"):
+        start_cluster(session.config, [item.nodeid for item in session.items])
+
+
+@pytest.hookimpl(optionalhook=True)
+def pytest_xdist_node_collection_finished(node, ids):
+    """xdist's controller, as each worker reports the selected tests: start the SLURM run (once)."""
+    start_cluster(node.config, ids)
+
+
+def start_cluster(config, ids):
+    """Start test_cluster.BackgroundRun in this process (the controller under xdist) when the tests ``ids`` include
+    the cluster tests and they can run here. It runs from the session's start, mostly waiting on SLURM, so it
+    overlaps everything else; it writes ``cluster.json`` into :func:`session_folder`, which the cluster tests
+    wait for, in whichever worker they run; :func:`pytest_sessionfinish` shuts the cluster down."""
+    if getattr(config, "posefix_cluster", None) or not any("test_cluster.py::" in i for i in ids):
         return
     import test_cluster
     if test_cluster.reason_not_runnable_here():
-        yield None
         return
-    run = test_cluster.BackgroundRun(tmp_path_factory.mktemp("slurm"), tmp_path_factory.mktemp("cluster-run"))
-    run.start()
-    try:
-        yield run
-    finally:
+    base = config._tmp_path_factory.getbasetemp()
+    for folder in ("slurm", "cluster-run"):
+        (base / folder).mkdir()
+    config.posefix_cluster = test_cluster.BackgroundRun(base / "slurm", base / "cluster-run", base / "cluster.json")
+    config.posefix_cluster.start()
+
+
+def pytest_sessionfinish(session):
+    """Stop the SLURM run this process started (always: also after a failure or an interrupt)."""
+    run = getattr(session.config, "posefix_cluster", None)
+    if run:
         run.stop()
+

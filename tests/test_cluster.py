@@ -1,6 +1,6 @@
 """The demo library on a real SLURM cluster through profiles/slurm (issue 7).
 
-A thread started with the session (``BackgroundRun``, from conftest's ``cluster_background``) starts
+A thread started with the session (``BackgroundRun``, from conftest's ``start_cluster``) starts
 a one-node cluster on this machine (tests/cluster/slurm-up.sh: slurm-wlm and munge from apt,
 controller and node on 127.0.0.1, no accounting daemon) and runs the demo through the profile while
 the other tests run (the cluster tests are ordered last and join it); the session's teardown always
@@ -26,11 +26,12 @@ import subprocess
 import sys
 import threading
 import time
+from pathlib import Path
 
 import pytest
 import yaml
 
-from conftest import ROOT
+from conftest import ROOT, session_folder
 
 pytestmark = [
     pytest.mark.cluster,
@@ -125,25 +126,33 @@ def _without_timing(value):
 
 
 class BackgroundRun(threading.Thread):
-    """The cluster part, in a thread from the session's start (conftest's ``cluster_background``):
-    start the one-node cluster (slurm-up.sh: apt-get when needed), then run the demo through the
-    workflow profile. It waits mostly on SLURM and Snakemake's status checks, so it overlaps the
-    rest of the suite; the tests of this module, ordered last, join it. ``stop`` always runs
-    slurm-down.sh (fixture teardown, also after a failure or an interrupt).
-
-    After ``join``: ``skip`` (why the cluster cannot run here) or ``error`` or ``result`` =
-    (work folder, CompletedProcess, log text, SLURM jobs of the run); ``log`` the scripts' output
-    and the timings.
+    """The cluster part, in a thread from the session's start (conftest's ``start_cluster``, in the
+    xdist controller when there are workers): start the one-node cluster (slurm-up.sh: apt-get when
+    needed), then run the demo through the workflow profile. It waits mostly on SLURM and Snakemake's
+    status checks, so it overlaps the rest of the suite. When done it writes ``report``, a JSON object
+    that the tests of this module, ordered last, wait for (:func:`cluster_run`): ``skip`` (why the
+    cluster cannot run here) or ``error`` or ``result`` = [work folder, exit status, log text, SLURM
+    jobs of the run]; ``messages``: the scripts' output and the timings. ``stop`` always runs
+    slurm-down.sh (the session's end, also after a failure or an interrupt).
     """
 
-    def __init__(self, state, work):
+    def __init__(self, state, work, report):
         super().__init__(daemon=True)
-        self.state, self.work = state, work
+        self.state, self.work, self.report = state, work, report
         self.env = {**os.environ, "SLURM_CONF": str(state / "slurm.conf")}
         self.skip = self.error = self.result = None
         self.log = []
 
     def run(self):
+        try:
+            self._run()
+        finally:
+            partial = self.report.with_suffix(".part")
+            partial.write_text(json.dumps({"skip": self.skip, "error": self.error, "result": self.result,
+                                           "messages": self.log}))
+            partial.replace(self.report)
+
+    def _run(self):
         try:
             start = time.monotonic()
             up = _run([CLUSTER / "slurm-up.sh", self.state], 600, env=self.env)
@@ -181,7 +190,7 @@ class BackgroundRun(threading.Thread):
         (self.work / "slurm-jobs.txt").write_text(table + "\n")
         self.log.append(f"cluster run: exit {proc.returncode} after {seconds:.0f} s in {self.work}; "
                         f"SLURM jobs:\n{table}")
-        return self.work, proc, log, jobs
+        return str(self.work), proc.returncode, log, jobs
 
     def stop(self):
         """Wait for the run (it is bounded by its timeouts), then stop the cluster."""
@@ -199,27 +208,34 @@ def reason_not_runnable_here():
 
 
 @pytest.fixture(scope="module")
-def cluster_run(cluster_background, request):
-    """The background run, finished: (its folder, the CompletedProcess, its output, the SLURM jobs
-    of the run, the local run's folder: the session's demo_run)."""
-    cluster_background.join(timeout=600 + RUN_TIMEOUT + 60)
-    print("\n".join(cluster_background.log))
-    if cluster_background.skip:
-        pytest.skip(f"cannot start a SLURM cluster here: {cluster_background.skip}")
-    assert cluster_background.error is None, cluster_background.error
-    return (*cluster_background.result, request.getfixturevalue("demo_run"))
+def cluster_run(tmp_path_factory, request):
+    """The session's background run, finished (its report, :class:`BackgroundRun`): (its folder, its exit
+    status, its output, the SLURM jobs of the run, the local run's folder: the session's demo_run)."""
+    report = session_folder(tmp_path_factory) / "cluster.json"
+    deadline = time.monotonic() + 600 + RUN_TIMEOUT + 60
+    while not report.exists():
+        if time.monotonic() > deadline:
+            pytest.fail(f"the session's SLURM run wrote no {report}")
+        time.sleep(2.0)
+    run = json.loads(report.read_text())
+    print("\n".join(run["messages"]))
+    if run["skip"]:
+        pytest.skip(f"cannot start a SLURM cluster here: {run['skip']}")
+    assert run["error"] is None, run["error"]
+    work, returncode, log, jobs = run["result"]
+    return Path(work), returncode, log, jobs, request.getfixturevalue("demo_run")
 
 
 def test_demo_runs_on_slurm_with_the_workflow_profile(cluster_run):
-    work, proc, log, jobs, _ = cluster_run
-    assert proc.returncode == 0, f"snakemake exited {proc.returncode} (124/137: timed out):\n{log[-4000:]}"
+    work, returncode, log, jobs, _ = cluster_run
+    assert returncode == 0, f"snakemake exited {returncode} (124/137: timed out):\n{log[-4000:]}"
     assert (work / "reports" / "demo" / "summary.json").exists()
     assert (work / "reports" / "demo" / "overview.png").exists()
 
 
 def test_every_rule_but_the_local_ones_ran_as_a_slurm_job(cluster_run):
-    work, proc, log, jobs, _ = cluster_run
-    assert proc.returncode == 0, log[-4000:]
+    work, returncode, log, jobs, _ = cluster_run
+    assert returncode == 0, log[-4000:]
     stats = _job_stats(log)
     assert LOCALRULES <= set(stats) and stats["fit"] == len(_poses(work)), stats
     # 1. The plugin's own account of it: one "submitted with SLURM jobid" line per non-local job.
@@ -252,8 +268,8 @@ def _poses(work):
 def test_cluster_results_equal_the_local_run(cluster_run):
     """The local run repaired all four poses; the poses of the cluster run are the same bytes and
     numbers (a pose's stages do not depend on the other poses)."""
-    work, proc, log, jobs, demo_run = cluster_run
-    assert proc.returncode == 0, log[-4000:]
+    work, returncode, log, jobs, demo_run = cluster_run
+    assert returncode == 0, log[-4000:]
     poses = _poses(work)
     assert poses and (POSES == "all" or poses == POSES.split(","))
     local, remote = demo_run / "results" / "demo" / "repaired", work / "results" / "demo" / "repaired"

@@ -12,8 +12,8 @@ import numpy as np
 import pytest
 
 from conftest import icosphere
-from posefix.workflow.command import (WORKFLOW, build_parser, failed_job_errors, failure_line, recap_line,
-                                      snakemake_command)
+from posefix.workflow.command import (WORKFLOW, build_parser, failed_job_errors, failure_line, print_missed_errors,
+                                      recap_line, snakemake_command)
 from posefix.io.errors import InputError
 from posefix.io.meshes import read_mesh, write_mesh
 
@@ -207,6 +207,21 @@ def test_the_failed_jobs_error_lines_come_from_the_logs_snakemake_names(tmp_path
     assert failed_job_errors(log, tmp_path) == ["posefix fit: error: results/a/constraints.h5: too few",
                                                 "posefix validate: error: lib/b.obj: line 4"]
     assert failed_job_errors("LockException", tmp_path) == [failure_line("LockException", tmp_path)]
+
+
+def test_a_jobs_error_line_that_the_output_did_not_show_is_printed_from_its_log(tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "logs").mkdir()
+    (tmp_path / "logs" / "unpack.log").write_text("posefix unpack: error: ball.usda: frame 2: NaN\n")
+    log = "Error in rule unpack:\n    log: logs/unpack.log (check log file(s) for error details)\n"
+    print_missed_errors(["posefix: 3 of 9 jobs doposefix unpack: error: ball.usd\n"], log)  # a broken line
+    assert capsys.readouterr().err.splitlines() == ["posefix unpack: error: ball.usda: frame 2: NaN"]
+    print_missed_errors(["posefix unpack: error: ball.usda: frame 2: NaN\n"], log)  # shown: not again
+    assert capsys.readouterr().err == ""
+    print_missed_errors([], "LockException")  # no job's line: the run's
+    assert capsys.readouterr().err.splitlines() == [failure_line("LockException", tmp_path)]
+    print_missed_errors(["posefix validate: error: lib/b.obj: line 4\n"], "LockException")
+    assert capsys.readouterr().err == ""
 
 
 def test_the_recap_of_a_failed_job_does_not_repeat_its_error_line():

@@ -241,6 +241,17 @@ def finished_lines(reports, results, most=10, container=None):
     return lines + [f"posefix: {what}: {path}" for what, path in pages if path.exists()]
 
 
+def print_missed_errors(shown, log_text):
+    """Print to stderr the failed jobs' error lines (:func:`failed_job_errors`, from their log files) that the run's
+    output did not show (``shown``: the lines it did): two jobs writing at once can break a line of Snakemake's
+    merged output (a test saw it on a loaded machine), their log files cannot. Where no job left one, the run's
+    :func:`failure_line`, unless the output showed an error line."""
+    shown = {line.rstrip("\n") for line in shown}
+    for line in failed_job_errors(log_text, Path.cwd()):
+        if line not in shown and (not shown or not line.startswith("posefix: ")):
+            print(line, file=sys.stderr)
+
+
 def main(argv=None):
     args = build_parser().parse_args(argv)
     problem = argument_problem(args)
@@ -255,8 +266,7 @@ def main(argv=None):
     if code == 130:
         print("posefix: interrupted; run the same command again to go on", file=sys.stderr)
     elif code != 0:
-        if not errors:
-            print(failure_line(log_path.read_text(errors="replace"), Path.cwd()), file=sys.stderr)
+        print_missed_errors(errors, log_path.read_text(errors="replace"))
         print(f"posefix: Snakemake's full output: {log_path}", file=sys.stderr)
     sys.exit(code)
 
