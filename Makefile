@@ -14,7 +14,7 @@ run: $(VENV)/.installed system
 	$(VENV)/bin/posefix repair --cores $(CORES) $(POSEFIX_ARGS)
 
 # The whole suite on $(CORES) processes, one test file each at a time (a file's fixtures are made once): the end-to-end
-# runs are chains of single-threaded stages, so two processes keep 2 cores busy (CI: 16.5 min against 23).
+# runs are chains of single-threaded stages, so two processes keep 2 cores busy (here: 16.5 min against 20).
 test: $(VENV)/.installed system
 	$(PY) -m pytest -n $(CORES) --dist loadfile $(PYTEST_ARGS)
 

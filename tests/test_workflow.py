@@ -1,4 +1,5 @@
-"""The Snakemake workflow end to end: demo library, determinism, bad libraries, the lion poses."""
+"""The Snakemake workflow end to end: demo library, determinism, bad libraries (the lion poses: test_lion_library;
+authored libraries: test_authoring_workflow)."""
 
 import json
 from pathlib import Path
@@ -7,7 +8,7 @@ import h5py
 import numpy as np
 import pytest
 
-from conftest import LION_POSES, icosphere, shared_library, snakemake
+from conftest import icosphere, snakemake
 from posefix.workflow.demo import POSES
 from posefix.io.meshes import write_mesh
 
@@ -206,40 +207,6 @@ def test_missing_reference_fails_at_startup(tmp_path):
     assert "Traceback" not in proc.stderr and not (tmp_path / "results").exists()
 
 
-@pytest.mark.data
-def test_lion_library(lion_run):
-    lib = shared_library("lion-poses")
-    results = lion_run / "results" / "lion-poses"
-    target_counts = {"lion-01": 465, "lion-04": 717, "lion-07": 903}  # SOURCES.md, independent check
-    for pose in LION_POSES:
-        with h5py.File(results / pose / "classify.h5", "r") as fh:
-            counts = fh["intersecting_faces"][()]
-            assert counts[0] == 138 and counts[-1] == target_counts.get(pose, counts[-1])
-            assert max(counts[1:-1]) <= max(counts[0], counts[-1])  # no tearing in the key frames
-            assert fh["mask"][()].sum() > 0.5 * len(fh["mask"])
-        size = sum(f.stat().st_size for f in (results / pose).rglob("*") if f.is_file())
-        assert size <= 25e6 and not (results / pose / "fit.checkpoint").exists(), (pose, size)  # issue 29: disk
-    _check_repaired_library(lion_run, lib, "lion-poses")
-
-
-def _check_repaired_library(work, lib, name):
-    """Repaired files keep the input's faces; fewer intersections than the target; V_C reproduced
-    within 1e-3 d on average and 5e-3 d at most; new intersecting faces only inside regions copied
-    from the target where key frames pass through each other (issue 4's acceptance)."""
-    from posefix.io.meshes import read_mesh
-    summary = json.loads((work / "reports" / name / "summary.json").read_text())
-    for e in summary["poses"]:
-        source = next(lib.glob(f"{e['pose']}.*"))
-        V_tgt, F = read_mesh(source)
-        V, F2 = read_mesh(work / "results" / name / "repaired" / source.name)
-        assert np.array_equal(F, F2) and V.shape == V_tgt.shape
-        i = e["intersecting_faces"]
-        assert i["repaired"] < i["target"] or i["repaired"] <= i["reference"], e["pose"]
-        assert e["deviation"]["constrained_mean"] <= 1e-3, e["pose"]
-        assert e["deviation"]["constrained_max"] <= 5e-3, e["pose"]
-        assert i["repaired_new"] == i["repaired_new_in_fallback"], e["pose"]
-
-
 def test_nested_config_overrides_reach_the_stages(tmp_path):
     proc = snakemake(tmp_path, "-n", "-p", "--config", "keyframes={'count': 5, 'align': 'false'}",
                      "classify={'ring': 2, 'contact': 0.01, 'exclude': {'demo-01': [3, 4]}}")
@@ -262,62 +229,6 @@ def test_constraints_are_an_intermediate_unless_kept(tmp_path):
     proc = snakemake(tmp_path, "-n", "--config", "poses=demo-01", "baselines=[]", "keep_intermediates=true")
     assert proc.returncode == 0 and "results/demo/demo-01/constraints.h5" in proc.stdout + proc.stderr
     assert "Would remove temporary output" not in proc.stdout + proc.stderr
-
-
-def test_author_a_library_from_the_demo_rig_and_repair_it(tmp_path):
-    """`snakemake skeletal_pose` (S1: the demo rig -> <pose>-ssd/-variational/-flow), then the S0 repair of one of them.
-    Called by its name before 2026-12 (`author`), which still works for a release and says the new one."""
-    proc = snakemake(tmp_path, "author", "--config", "skeletal_pose={'max_iters': 20}")
-    assert proc.returncode == 0, proc.stderr[-3000:]
-    assert "posefix: rule 'author' is now 'skeletal_pose'" in proc.stderr
-    library = tmp_path / "data" / "authored" / "demo-limb"
-    names = sorted(p.name for p in library.iterdir() if not p.name.startswith("."))  # and .snakemake_timestamp
-    assert names[0] == "demo-01-flow.obj" and "demo-limb-reference.obj" in names and len(names) == 13
-    with h5py.File(tmp_path / "results" / "authored" / "demo-limb" / "skeletal_pose.h5", "r") as fh:
-        intersecting = fh["intersecting"][()]
-    assert intersecting.shape == (4, 3) and intersecting[1, 2] < intersecting[1, 1]  # demo-02: flow < variational
-    proc = snakemake(tmp_path, "--config", f"library={library}", "poses=demo-02-flow")
-    assert proc.returncode == 0, proc.stderr[-3000:]
-    entry = json.loads((tmp_path / "reports" / "demo-limb" / "summary.json").read_text())["poses"][0]
-    assert entry["pose"] == "demo-02-flow" and entry["intersecting_faces"]["repaired_new"] == 0
-    assert (tmp_path / "results" / "demo-limb" / "repaired" / "demo-02-flow.obj").exists()
-
-
-def test_author_a_library_from_the_demo_pose_script_and_repair_it(tmp_path):
-    """`snakemake volumetric_pose` (S4: the demo pose script -> vol-bend, vol-fold, vol-twist), then the S0
-    repair of the folded one, with the baseline repairs beside it."""
-    proc = snakemake(tmp_path, "volumetric_pose", "--config", "volumetric_pose={'tet_vertices': 400}")
-    assert proc.returncode == 0, proc.stderr[-3000:]
-    library = tmp_path / "data" / "authored" / "demo-limb-volumetric"
-    names = sorted(p.name for p in library.iterdir() if not p.name.startswith("."))
-    assert names == ["demo-limb-volumetric-reference.obj", "vol-bend.obj", "vol-fold.obj", "vol-twist.obj"]
-    proc = snakemake(tmp_path, "--config", f"library={library}", "poses=vol-fold")
-    assert proc.returncode == 0, proc.stderr[-3000:]
-    entry = json.loads((tmp_path / "reports" / "demo-limb-volumetric" / "summary.json").read_text())["poses"][0]
-    assert entry["pose"] == "vol-fold" and entry["intersecting_faces"]["target"] > 0
-    assert entry["intersecting_faces"]["repaired_new"] == entry["intersecting_faces"]["repaired_new_in_fallback"]
-    assert (tmp_path / "results" / "demo-limb-volumetric" / "repaired" / "vol-fold.obj").exists()
-
-
-def test_animate_a_library_from_the_demo_markers_and_repair_it(tmp_path):
-    """`snakemake volumetric_animate` (S4 §3.2: 8 markers, 13 frames of the demo limb bending) gives a pose
-    library of the reference's faces and vertex order that the repair workflow reads."""
-    from posefix.io.meshes import read_mesh
-    proc = snakemake(tmp_path, "volumetric_animate", "--config", "volumetric_animate={'tet_vertices': 400}")
-    assert proc.returncode == 0, proc.stderr[-3000:]
-    library = tmp_path / "data" / "authored" / "demo-limb-markers"
-    names = sorted(p.name for p in library.iterdir() if not p.name.startswith("."))
-    assert names == [f"demo-limb-markers-{k:04d}.obj" for k in range(13)] + ["demo-limb-markers-reference.obj"]
-    V, F = read_mesh(library / "demo-limb-markers-reference.obj")
-    last, F_last = read_mesh(library / "demo-limb-markers-0012.obj")
-    assert np.array_equal(F, F_last) and np.abs(last - V).max() > 1.0  # the tip went round the bend
-    with h5py.File(tmp_path / "results" / "authored" / "demo-limb-markers" / "volumetric_animate.h5", "r") as fh:
-        # the surface passes within 5 % d of every marker on 400 tet vertices (0.9 % at the default 2500)
-        assert fh["residuals"].shape == (13, 8) and fh["metrics"].attrs["residual_max_rel"] < 0.05
-    proc = snakemake(tmp_path, "--config", f"library={library}", "poses=demo-limb-markers-0012")
-    assert proc.returncode == 0, proc.stderr[-3000:]
-    entry = json.loads((tmp_path / "reports" / "demo-limb-markers" / "summary.json").read_text())["poses"][0]
-    assert entry["pose"] == "demo-limb-markers-0012" and entry["intersecting_faces"]["repaired_new"] == 0
 
 
 def test_files_that_cannot_be_poses_are_left_out_alone_and_the_others_repaired(tmp_path):
