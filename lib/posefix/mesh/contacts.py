@@ -126,7 +126,8 @@ def contact_vertices(frames, F, V_ref, distance, radius):
     face_status = status[:, patch[F[:, 0]]]  # (k, m): the nearest of a face's vertex patches
     for corner in (1, 2):
         np.minimum(face_status, status[:, patch[F[:, corner]]], out=face_status)
-    groups, patches = (vert_order, vert_start, face_order, face_start), (patch, status, face_status)
+    groups = (vert_order, vert_start, face_order, face_start)
+    patches = (patch, status, face_status, to_seed, between, radius)
     out = np.zeros(frames.shape[:2], dtype=bool)
     unsure = []
     for frame, V in enumerate(frames):
@@ -149,13 +150,15 @@ def contact_vertices(frames, F, V_ref, distance, radius):
 
 def _close_pairs(V, F, distance, groups, patches):
     """Yield, about :data:`_CHUNK` pairs at a time, (vertices (p,), faces (p,)) int64: the vertices of ``V`` (n, 3)
-    closer than ``distance`` to a face of another patch that is not NEAR theirs. ``groups``: (vertex order, vertex
-    starts, face order, face starts) of the patches; ``patches``: (patch of each vertex (n,), patch status (k, k),
-    face status (k, m)). Within each pair of patches whose boxes come that close, a box tree of the one's vertices
-    against one of the other's faces finds the pairs to measure: their count grows with the contacts, not with the
-    product of the patches' sizes."""
+    closer than ``distance`` to a face of another patch that is neither NEAR theirs nor surely near them by
+    :func:`_vertex_bounds`. ``groups``: (vertex order, vertex starts, face order, face starts) of the patches;
+    ``patches``: (patch of each vertex (n,), patch status (k, k), face status (k, m), distance of each vertex to its
+    patch's seed (n,), distances between seeds (k, k), the neighbourhood radius) (:func:`geodesic_patches`). Within
+    each pair of patches whose boxes come that close, a box tree of the one's vertices against one of the other's
+    faces finds the pairs to measure: their count grows with the contacts, not with the product of the patches'
+    sizes."""
     vert_order, vert_start, face_order, face_start = groups
-    patch, status, face_status = patches
+    patch, status = patches[:2]
     with_faces = np.flatnonzero(face_start[1:] > face_start[:-1])
     T = V[F]
     t_lo, t_hi = T.min(axis=1), T.max(axis=1)
@@ -176,18 +179,22 @@ def _close_pairs(V, F, distance, groups, patches):
         found.append((verts[close[:, 0]], faces[close[:, 1]]))
         count += len(close)
         if count >= _CHUNK or i == len(a) - 1:
-            yield _measured(V, T, distance, found, (patch, face_status))
+            yield _measured(V, F, distance, found, patches)
             found, count = [], 0
 
 
-def _measured(V, T, distance, found, patches):
-    """The pairs of ``found`` (list of (vertices, faces)) whose face is not NEAR the vertex's patch and closer than
-    ``distance`` to it: (vertices (p,), faces (p,))."""
-    patch, face_status = patches
+def _measured(V, F, distance, found, patches):
+    """The pairs of ``found`` (list of (vertices, faces)) whose face is neither NEAR the vertex's patch nor surely
+    near the vertex by :func:`_vertex_bounds` (both pair by pair, cheaper than the distance), and closer than
+    ``distance`` to it: (vertices (p,), faces (p,)). ``patches``: as :func:`_close_pairs`."""
+    patch, _, face_status, to_seed, between, radius = patches
     vv, ff = (np.concatenate(x) for x in zip(*found))
     keep = face_status[patch[vv], ff] != NEAR
     vv, ff = vv[keep], ff[keep]
-    hit = point_triangle_distance(V[vv], T[ff, 0], T[ff, 1], T[ff, 2]) < distance
+    near, _ = _vertex_bounds(np.stack([vv, ff], 1), F, patch, to_seed, between, radius)
+    vv, ff = vv[~near], ff[~near]
+    T = V[F[ff]]
+    hit = point_triangle_distance(V[vv], T[:, 0], T[:, 1], T[:, 2]) < distance
     return vv[hit], ff[hit]
 
 
