@@ -397,7 +397,7 @@ def test_poses_whose_names_a_shell_would_split_are_repaired_under_their_own_name
     library = tmp_path / "lib"
     V, F = icosphere(2)
     write_mesh(library / "ball-reference.obj", V, F)
-    names = ["walk 2", "it's", "$HOME", "a;b", "sauté", 'say "hi"']
+    names = ["walk 2", "it's $HOME;a", 'sauté "hi"']  # a space, quotes, a dollar sign, a semicolon, non-ASCII
     for i, name in enumerate(names):
         write_mesh(library / f"{name}.obj", V * [1.0 + 0.05 * i, 1.0, 0.95], F)
     proc = snakemake(tmp_path, "--config", f"library={library}", "baselines=[]")
