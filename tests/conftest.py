@@ -182,7 +182,8 @@ def start_cluster(config, ids):
     the cluster tests and they can run here. It runs from the session's start, mostly waiting on SLURM, so it
     overlaps everything else; it writes ``cluster.json`` into :func:`session_folder`, which the cluster tests
     wait for, in whichever worker they run; :func:`pytest_sessionfinish` shuts the cluster down."""
-    if getattr(config, "posefix_cluster", None) or not any("test_cluster.py::" in i for i in ids):
+    if config.option.collectonly or getattr(config, "posefix_cluster", None) \
+            or not any("test_cluster.py::" in i for i in ids):
         return
     import test_cluster
     if test_cluster.reason_not_runnable_here():
