@@ -14,9 +14,10 @@ run: $(VENV)/.installed system
 	$(VENV)/bin/posefix repair --cores $(CORES) $(POSEFIX_ARGS)
 
 # The whole suite on $(CORES) processes, one test file each at a time (a file's fixtures are made once): the end-to-end
-# runs are chains of single-threaded stages, so two processes keep 2 cores busy (here: 16.5 min against 20).
+# runs are chains of single-threaded stages, so two processes keep 2 cores busy (three were no faster). The end-to-end
+# files go first, longest first (tests/conftest.py LONGEST_FIRST; --no-loadscope-reorder keeps that order).
 test: $(VENV)/.installed system
-	$(PY) -m pytest -n $(CORES) --dist loadfile $(PYTEST_ARGS)
+	$(PY) -m pytest -n $(CORES) --dist loadfile --no-loadscope-reorder $(PYTEST_ARGS)
 
 # The unit tests alone, for your own loop, on $(CORES) processes: no end-to-end pipeline, SLURM or ../shared/data tests.
 test-fast: $(VENV)/.installed system

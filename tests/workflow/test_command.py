@@ -72,7 +72,7 @@ def test_a_library_too_large_for_the_memory_given_is_refused_in_one_line_before_
 
 @pytest.mark.pipeline
 def test_posefix_repair_from_another_folder_matches_the_workflow_run(demo_run, tmp_path):
-    proc = posefix("repair", demo_run / "data" / "demo", "--config", "poses=demo-01",
+    proc = posefix("repair", demo_run / "data" / "demo", "--config", "poses=demo-01", "baselines=[]",
                    cwd=tmp_path)
     assert proc.returncode == 0, proc.stderr[-3000:]
     lines = proc.stdout.splitlines()
@@ -85,7 +85,7 @@ def test_posefix_repair_from_another_folder_matches_the_workflow_run(demo_run, t
     name = "results/demo/repaired/demo-01.obj"
     assert (tmp_path / name).read_bytes() == (demo_run / name).read_bytes()
     assert list((tmp_path / "posefix-logs").glob("repair-*.log"))
-    proc = posefix("report", demo_run / "data" / "demo", "--config", "poses=demo-01",
+    proc = posefix("report", demo_run / "data" / "demo", "--config", "poses=demo-01", "baselines=[]",
                    cwd=tmp_path)
     assert proc.returncode == 0, proc.stderr[-3000:]
     assert (tmp_path / "reports" / "demo" / "report.html").stat().st_size > 100_000

@@ -13,7 +13,6 @@ import re
 from dataclasses import dataclass
 
 import numpy as np
-import trimesh
 
 from posefix.io.errors import InputError, one_line
 from posefix.io.files import atomic_write_bytes
@@ -88,6 +87,8 @@ def read_mesh(path):
     data = _read_bytes(mf)
     declared = fmt.declared_counts(data)
     fmt.check(path, data)
+    import trimesh  # here, not above: its import is most of a stage's start-up (0.2 s), and most stages read no mesh
+
     try:
         mesh = trimesh.load(io.BytesIO(data), file_type=mf.fmt, process=False, force="mesh", **fmt.LOAD_KWARGS)
         V = np.asarray(mesh.vertices, dtype=np.float64)
