@@ -97,6 +97,15 @@ def snakemake(workdir, *args):
     return subprocess.run(cmd, capture_output=True, text=True, timeout=900)
 
 
+def h5_datasets(path):
+    """Every dataset of the HDF5 file ``path``: {name: value}."""
+    import h5py
+    out = {}
+    with h5py.File(path, "r") as fh:
+        fh.visititems(lambda n, o: out.__setitem__(n, o[()]) if isinstance(o, h5py.Dataset) else None)
+    return out
+
+
 def session_folder(tmp_path_factory):
     """The session's base temporary folder, shared by pytest-xdist's workers (`make test` runs on ``CORES``
     processes): each worker's own is a subfolder of it."""

@@ -15,13 +15,6 @@ from posefix.io.meshes import write_mesh
 pytestmark = pytest.mark.pipeline
 
 
-def _datasets(path):
-    out = {}
-    with h5py.File(path, "r") as fh:
-        fh.visititems(lambda n, o: out.__setitem__(n, o[()]) if isinstance(o, h5py.Dataset) else None)
-    return out
-
-
 def test_demo_run_produces_every_artifact(demo_run):
     results = demo_run / "results" / "demo"
     assert (results / "reference.h5").exists()
@@ -182,19 +175,10 @@ def test_report_has_every_section_and_non_blank_figures(demo_run):
     assert pngs == len(POSES) * len(figures) + 1
 
 
-def test_rerun_is_a_no_op_and_outputs_are_deterministic(demo_run, tmp_path):
+def test_rerun_is_a_no_op(demo_run):
+    """(A new run's outputs are the same bytes: tests/workflow/test_command.py, from another folder.)"""
     proc = snakemake(demo_run, "-n")
     assert "Nothing to be done" in proc.stdout + proc.stderr
-    proc = snakemake(tmp_path, "--config", "poses=demo-02", "baselines=[]")  # S0's stages are compared
-    assert proc.returncode == 0, proc.stderr[-3000:]
-    for stage in ("keyframes", "classify", "fit", "integrate", "verify"):
-        a = _datasets(demo_run / "results" / "demo" / "demo-02" / f"{stage}.h5")
-        b = _datasets(tmp_path / "results" / "demo" / "demo-02" / f"{stage}.h5")
-        assert a.keys() == b.keys()
-        for k in a:
-            if "seconds" not in k:
-                assert np.array_equal(a[k], b[k]), (stage, k)
-    assert not (tmp_path / "results" / "demo" / "demo-01").exists()
 
 
 def test_missing_reference_fails_at_startup(tmp_path):

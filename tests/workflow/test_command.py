@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from conftest import icosphere
+from conftest import h5_datasets, icosphere
 from posefix.workflow.command import (WORKFLOW, build_parser, failed_job_errors, failure_line, print_missed_errors,
                                       recap_line, snakemake_command)
 from posefix.io.errors import InputError
@@ -84,6 +84,10 @@ def test_posefix_repair_from_another_folder_matches_the_workflow_run(demo_run, t
                           "posefix: 3D viewer: reports/demo/viewer.html"], lines
     name = "results/demo/repaired/demo-01.obj"
     assert (tmp_path / name).read_bytes() == (demo_run / name).read_bytes()
+    for stage in ("keyframes", "classify", "fit", "integrate", "verify"):  # deterministic: the same numbers
+        a, b = (h5_datasets(run / "results" / "demo" / "demo-01" / f"{stage}.h5") for run in (demo_run, tmp_path))
+        assert a.keys() == b.keys() and all(np.array_equal(a[k], b[k]) for k in a if "seconds" not in k), stage
+    assert not (tmp_path / "results" / "demo" / "demo-02").exists()
     assert list((tmp_path / "posefix-logs").glob("repair-*.log"))
     proc = posefix("report", demo_run / "data" / "demo", "--config", "poses=demo-01", "baselines=[]",
                    cwd=tmp_path)
