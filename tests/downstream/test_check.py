@@ -1,6 +1,11 @@
 """The downstream check: handles, and the grid of runs towards both examples."""
 
+import subprocess
+import sys
+import time
+
 import numpy as np
+import psutil
 import pytest
 
 from test_gauss_newton import _bend, _strip
@@ -50,3 +55,23 @@ def test_runs_in_parallel_give_the_serial_results_bit_for_bit():
     for a, b in zip(parallel.runs, serial.runs):
         assert a.V.tobytes() == b.V.tobytes() and a.errors.tobytes() == b.errors.tobytes()
         assert (a.reason, a.gradient_reduction, a.min_area_ratio) == (b.reason, b.gradient_reduction, b.min_area_ratio)
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="workers die with their parent on Linux (prctl)")
+def test_no_worker_outlives_its_parent_killed_with_sigkill(tmp_path):
+    """A process running the check's runs on 2 workers (here runs that sleep a minute) is killed with SIGKILL, as
+    a stage's parent can be: 2 s later no worker is left running (issue 50)."""
+    script = tmp_path / "runs.py"
+    script.write_text("import time\nfrom posefix.downstream.check import _starmap\n"
+                      "if __name__ == '__main__':\n    list(_starmap(time.sleep, [(60,), (60,)], 2))\n")
+    parent = psutil.Process(subprocess.Popen([sys.executable, str(script)]).pid)
+    deadline = time.monotonic() + 60
+    while len(workers := [c for c in parent.children() if "spawn_main" in " ".join(c.cmdline())]) < 2:
+        assert time.monotonic() < deadline, "the workers did not start"
+        time.sleep(0.1)
+    time.sleep(3.0)  # they have started sleeping (killed before, they exit as well: their parent is gone)
+    parent.kill()
+    parent.wait(10)
+    time.sleep(2.0)
+    left = [w.pid for w in workers if w.is_running() and w.status() != psutil.STATUS_ZOMBIE]
+    assert not left, f"workers {left} outlived their parent"

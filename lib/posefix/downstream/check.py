@@ -6,9 +6,13 @@ interpolation weights alpha and bending stiffnesses k_b (single settings are fra
 far-apart handle vertices are pinned at their linear blend in every run.
 """
 
+import ctypes
 import itertools
 import logging
 import multiprocessing
+import os
+import signal
+import sys
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
 
@@ -121,7 +125,7 @@ def downstream_check(V_ref, F, examples, alphas=(1.0,), k_bend=(1e-2,), k_stretc
         Runs at a time, each in a process of its own with one BLAS thread: the same runs as one after
         the other (iterations, stop reasons; bit for bit on the demo, but runs that end in a collapsed
         triangle can differ in the last bits, reports/bench/downstream.md). The processes are spawned: a calling script needs the
-        ``if __name__ == "__main__":`` guard.
+        ``if __name__ == "__main__":`` guard. On Linux they die with the calling process, however it dies.
 
     Returns
     -------
@@ -152,5 +156,20 @@ def _starmap(fn, jobs, workers):
         yield from itertools.starmap(fn, jobs)
         return
     with ProcessPoolExecutor(min(workers, len(jobs)), mp_context=multiprocessing.get_context("spawn"),
-                             initializer=threadpool_limits, initargs=(1,)) as pool:
+                             initializer=_worker_start, initargs=(os.getpid(),)) as pool:
         yield from pool.map(fn, *zip(*jobs))
+
+
+PR_SET_PDEATHSIG = 1
+"""Linux's ``prctl`` option: the signal a process gets when the thread that started it ends."""
+
+
+def _worker_start(parent):
+    """A worker's set-up: one BLAS thread, and (Linux) SIGKILL when its parent, the process ``parent`` (pid), dies,
+    however it dies: a killed stage leaves no Gauss-Newton run behind. Exits at once where the parent is already
+    gone (it died before the signal was asked for)."""
+    threadpool_limits(1)
+    if sys.platform.startswith("linux"):
+        ctypes.CDLL(None, use_errno=True).prctl(PR_SET_PDEATHSIG, signal.SIGKILL)
+        if os.getppid() != parent:
+            os._exit(1)
