@@ -162,13 +162,19 @@ def reference_vertices():
                 _VERTICES["n"] = open_container(LIBRARY.container, LIBRARY.mesh).n
             else:
                 _VERTICES["n"] = len(read_reference(LIBRARY.reference.path)[0])
-        except Exception:  # noqa: BLE001  (any unreadable file: validate_reference names it)
+        except InputError as exc:  # a reference mesh file that is there and cannot be read: refused before any job
+            reference = Path(LIBRARY.reference.path)
+            _VERTICES["error"] = exc if Path(exc.path) == reference and reference.is_file() else None
+            return 0
+        except Exception:  # noqa: BLE001  (any other unreadable file: validate_reference names it)
             return 0
     return _VERTICES["n"]
 
 
-if workflow.is_main_process:  # a reference too large for the run is refused before any job starts
+if workflow.is_main_process:  # an unreadable reference, or one too large for the run, is refused before any job
     _problem = memory_problem(reference_vertices(), MEMORY_LIMIT_MB)
+    if _VERTICES.get("error"):
+        sys.exit(f"posefix: error: {_VERTICES['error']}")
     if _problem:
         sys.exit(f"posefix: error: {LIBRARY.reference.path}: {_problem}")
 

@@ -191,6 +191,20 @@ def test_missing_reference_fails_at_startup(tmp_path):
     assert "Traceback" not in proc.stderr and not (tmp_path / "results").exists()
 
 
+def test_an_unreadable_reference_is_refused_at_startup_in_one_line(tmp_path):
+    """Before the memory check and before any job (issue 50): the reference's own one line."""
+    lib = tmp_path / "lib"
+    V, F = icosphere(1)
+    write_mesh(lib / "ball-01.obj", V, F)
+    (lib / "ball-reference.obj").write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 7\n")
+    proc = snakemake(tmp_path, "--config", f"library={lib}")
+    assert proc.returncode != 0 and "Traceback" not in proc.stderr
+    errors = [line for line in proc.stderr.splitlines() if "error" in line]
+    assert errors == [f"posefix: error: {lib / 'ball-reference.obj'}: line 4: face vertex index 7 is out of range 1..3 "
+                      "(OBJ indices start at 1)"], proc.stderr
+    assert not (tmp_path / "results").exists()
+
+
 def test_nested_config_overrides_reach_the_stages(tmp_path):
     proc = snakemake(tmp_path, "-n", "-p", "--config", "keyframes={'count': 5, 'align': 'false'}",
                      "classify={'ring': 2, 'contact': 0.01, 'exclude': {'demo-01': [3, 4]}}")
