@@ -78,3 +78,24 @@ def test_a_mesh_of_several_primitives_is_one_library_mesh(tmp_path, sphere):
     box = open_container(path)
     assert box.n == 2 * len(V) and np.array_equal(box.faces, np.concatenate([F, F + len(V)]))
     assert np.array_equal(box.points("target-1"), np.concatenate([base_plus(V, poses[1])] * 2))
+
+
+def test_a_primitive_that_a_target_does_not_move_is_written_back_moved(tmp_path, sphere):
+    """A morph target with no POSITION in one primitive (that primitive stays at its base in the pose; issue 50:
+    it ended in a TypeError on write) gets its own accessor when the repaired pose moves it."""
+    V, F, poses = sphere
+    path = write_gltf(tmp_path / "body.glb", V, poses, F)
+    gltf = pygltflib.GLTF2().load(str(path))
+    mesh = gltf.meshes[0]
+    mesh.primitives.append(pygltflib.Primitive(attributes=pygltflib.Attributes(POSITION=0), indices=1,
+                                               targets=[dict(t) for t in mesh.primitives[0].targets]))
+    mesh.primitives[1].targets[1] = {}  # target-1 does not move the second primitive
+    gltf.save(str(path))
+    box = open_container(path)
+    base = base_plus(V, V)
+    assert np.array_equal(box.points("target-1"), np.concatenate([base_plus(V, poses[1]), base]))
+    moved = np.concatenate([base_plus(V, poses[1]), base + 0.25])
+    box.write(tmp_path / "out.glb", {"target-1": moved})
+    back = open_container(tmp_path / "out.glb")
+    np.testing.assert_allclose(back.points("target-1"), moved, rtol=0, atol=1e-6)
+    assert np.array_equal(back.points("target-0"), box.points("target-0"))

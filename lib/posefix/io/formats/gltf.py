@@ -54,7 +54,7 @@ class GltfContainer(Container):
             for primitive, (_, first, count) in zip(primitives, self.details["spans"]):
                 delta = (np.asarray(X[first:first + count], dtype=np.float64)
                          - self.details["base"][first:first + count]).astype(np.float32)
-                _put_accessor(gltf, buffers, _target_position(primitive.targets[key]), delta)
+                _put_accessor(gltf, buffers, _position_accessor(gltf, primitive.targets[key], count), delta)
         atomic_write_bytes(out, _encode(gltf, buffers, str(out).lower().endswith(".glb")))
 
 
@@ -196,6 +196,21 @@ def _normalized(values, component):
     """Normalized integers as the glTF specification maps them: unsigned c / max, signed max(c / max, -1)."""
     info = np.iinfo(np.dtype(COMPONENTS[component]))
     return np.maximum(values / info.max, -1.0)
+
+
+def _position_accessor(gltf, target, count):
+    """The ``POSITION`` accessor index of the morph target ``target`` (pygltflib Attributes or dict); a new
+    float32 accessor of ``count`` points where it has none (the primitive does not move in that target: the
+    repair may move it)."""
+    index = _target_position(target)
+    if index is None:
+        gltf.accessors.append(pygltflib.Accessor(componentType=5126, count=count, type="VEC3"))
+        index = len(gltf.accessors) - 1
+        if isinstance(target, dict):
+            target["POSITION"] = index
+        else:
+            target.POSITION = index
+    return index
 
 
 def _put_accessor(gltf, buffers, index, values):
