@@ -147,6 +147,16 @@ def test_arguments_that_cannot_be_right_are_refused_in_one_line_before_anything_
     assert not (tmp_path / "posefix-logs").exists() and not (tmp_path / ".snakemake").exists()
 
 
+def test_a_library_named_after_config_is_refused_in_one_line_that_says_where_it_goes(tmp_path):
+    """``--config`` takes every word after it, so a library after it was taken for a setting (issue 50: the run
+    ended in ``ValueError: not enough values to unpack``)."""
+    proc = posefix("repair", "--config", "poses=a", tmp_path, cwd=tmp_path)
+    assert proc.returncode != 0 and proc.stdout == "" and proc.stderr.splitlines() == [
+        f"posefix: error: --config {tmp_path}: not KEY=VALUE (name the library before --config: posefix repair "
+        "<library> --config KEY=VALUE ...)"]
+    assert not (tmp_path / "posefix-logs").exists()
+
+
 def test_a_usd_or_gltf_file_is_a_library_named_after_the_file(tmp_path):
     from posefix.workflow.command import argument_problem, finished_lines, library_name
     args = build_parser().parse_args(["report", str(tmp_path / "walk.cycle.usdz")])

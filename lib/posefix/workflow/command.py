@@ -119,6 +119,10 @@ def argument_problem(args):
             return f"{args.library}: not a folder, nor a USD or glTF file ({', '.join(CONTAINER_SUFFIXES)})"
         if not Path(args.library).is_file():
             return f"{args.library}: no such file"
+    loose = [entry for entry in args.config if "=" not in entry]
+    if loose:  # --config takes every word after it: a library named after it is one
+        return (f"--config {loose[0]}: not KEY=VALUE (name the library before --config: posefix {args.command} "
+                f"<library> --config KEY=VALUE ...)")
     if args.command == "repair" and args.cores < 1:
         return f"--cores {args.cores}: needs at least 1 core"
     if args.command == "repair" and args.memory is not None and args.memory <= 0:
