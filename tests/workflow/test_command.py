@@ -190,7 +190,11 @@ def test_the_report_of_a_library_repaired_under_another_name_goes_to_that_name(t
      "posefix: error: permission denied (PermissionError: [Errno 13] Permission denied: 'results/demo')"),
     ("WildcardError in rule validate in file rules/library.smk, line 47:\nWildcards in input files cannot be "
      "determined from output files: 'pose'", "posefix: error: WildcardError in rule validate in file "
-     "rules/library.smk, line 47:"),
+     "rules/library.smk, line 47: Wildcards in input files cannot be determined from output files: 'pose'"),
+    # posefix report before a repair: the explanation is on the line after "WorkflowError:" (issue 50)
+    ("Building DAG of jobs...\nWorkflowError:\n\nFile reports/lib/figures/ball-01/renders.png marked for report but "
+     "does not exist.\n", "posefix: error: WorkflowError: File reports/lib/figures/ball-01/renders.png marked for "
+     "report but does not exist."),
     ("Building DAG of jobs...\nsomething unexpected", "posefix: error: the run failed before any stage reported "
                                                      "(see Snakemake's full output below)"),
 ])

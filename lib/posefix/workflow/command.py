@@ -191,10 +191,12 @@ def failure_line(log_text, folder):
     """The one-line cause of a run that failed with no posefix error line, from Snakemake's log (str)."""
     lines = log_text.splitlines()
     for pattern, message in FAILURES:
-        for line in lines:
+        for k, line in enumerate(lines):
             match = pattern.search(line)
             if match:
                 cause = match.groupdict().get("cause", "").strip()
+                if cause.endswith(":"):  # "WorkflowError:", the explanation on the next line that says something
+                    cause = " ".join([cause, *[text.strip() for text in lines[k + 1:] if text.strip()][:1]])
                 return "posefix: error: " + message.format(folder=folder, cause=cause[:300])
     return "posefix: error: the run failed before any stage reported (see Snakemake's full output below)"
 
