@@ -6,7 +6,10 @@ import numpy as np
 import pytest
 import trimesh
 
+from conftest import icosphere
+from posefix.io.errors import InputError
 from posefix.io.formats import ply
+from posefix.io.meshes import read_mesh
 
 
 @pytest.mark.parametrize("kind", ["ascii", "binary_little_endian", "binary_big_endian"])
@@ -23,3 +26,15 @@ def test_encodings_read_back_exactly(kind):
 def test_header_without_counts():
     assert ply.declared_counts(b"ply\nformat ascii 1.0\n") == (None, None)
     assert ply.encoding(b"garbage") == ply.DEFAULT_ENCODING
+
+
+@pytest.mark.parametrize("declared", [167, 157])
+def test_an_ascii_header_that_miscounts_the_vertices_is_named_as_the_cause(tmp_path, declared):
+    """Issue 50: trimesh said "could not be read to its end due to unmatched data"."""
+    V, F = icosphere(2)  # 162 vertices, 320 faces
+    text = ply.encode(V, F, "ascii").decode().replace("element vertex 162\n", f"element vertex {declared}\n")
+    (tmp_path / "a.ply").write_text(text)
+    with pytest.raises(InputError) as error:
+        read_mesh(tmp_path / "a.ply")
+    assert str(error.value) == f"{tmp_path / 'a.ply'}: the header declares {declared} vertices but the file has 162 " \
+                               "vertex rows"

@@ -2,8 +2,7 @@
 
 import re
 
-from posefix.io.errors import InputError
-from posefix.io.formats.text import rows
+from posefix.io.formats.text import check_vertex_rows, rows
 
 LOAD_KWARGS = {}
 
@@ -17,19 +16,16 @@ def declared_counts(data):
 
 
 def check(path, data):
-    """A header whose vertex count is not the body's: trimesh would read the first face rows as vertices (or the
-    last vertex rows as faces), and the problem would show as a face count. Checked where the vertex rows are plain
-    (three numbers each: a face row has at least four)."""
+    """A header whose vertex count is not the body's (:func:`~posefix.io.formats.text.check_vertex_rows`), where the
+    vertex rows are plain (three numbers each; not COFF's colours)."""
     nv, _ = declared_counts(data)
     if nv is None:
         return
-    lines = [line.split() for line in re.sub(rb"#[^\n]*", b"", data).splitlines() if line.strip()]
-    body = lines[1 if len(lines[0]) >= 3 else 2:]  # after "OFF nv nf ne" on one line, or the counts on the next
-    if not body or len(body[0]) != 3:
-        return
-    plain = next((k for k, row in enumerate(body) if len(row) != 3), len(body))
-    if plain != nv:
-        raise InputError(path, f"the header declares {nv} vertices but the file has {plain} vertex rows")
+    lines = re.sub(rb"#[^\n]*", b"", data).splitlines()
+    lines = [line for line in lines if line.strip()]
+    body = lines[1 if len(lines[0].split()) >= 3 else 2:]  # after "OFF nv nf ne" on one line, or the counts next
+    if body and len(body[0].split()) == 3:
+        check_vertex_rows(path, b"\n".join(body), nv, 3)
 
 
 def encode(V, F):

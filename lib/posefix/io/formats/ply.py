@@ -4,7 +4,7 @@ import re
 
 import numpy as np
 
-from posefix.io.formats.text import rows
+from posefix.io.formats.text import check_vertex_rows, rows
 
 LOAD_KWARGS = {}
 DEFAULT_ENCODING = "binary_little_endian"
@@ -22,7 +22,18 @@ def declared_counts(data):
 
 
 def check(path, data):
-    """Nothing that trimesh would silently change."""
+    """An ascii header whose vertex count is not the body's (:func:`~posefix.io.formats.text.check_vertex_rows`;
+    trimesh reported "unmatched data"), where the vertex element comes first and its rows can be told from face
+    rows (scalar properties, not four)."""
+    end = data.find(b"end_header")
+    if end < 0 or encoding(data) != "ascii":
+        return
+    first = re.search(rb"element\s+(\w+)\s+(\d+)\s*\n((?:\s*property[^\n]*\n)*)", data[:end + 1])
+    if first is None or first.group(1) != b"vertex" or b"list" in first.group(3):
+        return
+    width = first.group(3).count(b"property")
+    if width != 4:
+        check_vertex_rows(path, data[data.find(b"\n", end) + 1:], int(first.group(2)), width)
 
 
 def encoding(data):
