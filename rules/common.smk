@@ -2,7 +2,6 @@
 # posefix is installed in the interpreter that runs Snakemake (the venv's under `make run`).
 import os
 import shlex
-import subprocess
 import sys
 from pathlib import Path
 
@@ -12,7 +11,7 @@ from snakemake.utils import validate
 from posefix.workflow import demo
 from posefix.workflow.cli import config_flags, named_options, put_interpreter_first_on_path
 from posefix.workflow.command import failed_job_errors, recap_line
-from posefix.workflow.partial_summary import finished_poses, pose_errors
+from posefix.workflow.partial_summary import finished_poses, pose_errors, stage_finished
 from posefix.workflow.config_check import config_problems, typed_by_schema
 from posefix.io.errors import InputError
 from posefix.workflow.fingerprint import CodeFingerprints
@@ -303,8 +302,7 @@ def partial_summary(errors):
                 "--log", f"{RESULTS}/logs/partial-overview.log"]
     viewer = [sys.executable, stage_script("viewer"), "--summary", f"{REPORTS}/summary.json", "--results", RESULTS,
               "--out", f"{REPORTS}/viewer.html", "--log", f"{RESULTS}/logs/partial-viewer.log"]
-    quiet = {"stdout": subprocess.DEVNULL, "stderr": subprocess.DEVNULL}  # the stages' own logs keep their lines
-    if all(subprocess.run(stage, **quiet).returncode == 0 for stage in (summary, overview, viewer)):
+    if all(stage_finished(stage) for stage in (summary, overview, viewer)):
         print(f"posefix: summary of the {len(finished)} poses that finished, {len(unfinished)} listed as failed: "
               f"{REPORTS}/summary.html", file=sys.stderr)
 
@@ -325,6 +323,6 @@ def partial_containers():
         command = [sys.executable, stage_script("pack"), "--container", LIBRARY.container, "--mesh", LIBRARY.mesh,
                    "--repaired", f"{RESULTS}/{repair}", "--poses", ",".join(done), "--out", out,
                    "--log", f"{RESULTS}/logs/partial-pack-{repair}.log"]
-        if subprocess.run(command, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL).returncode == 0:
+        if stage_finished(command):
             print(f"posefix: {out}: {len(done)} of {len(SUMMARY_POSES)} poses repaired, the others as in the input",
                   file=sys.stderr)

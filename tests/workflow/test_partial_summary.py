@@ -1,6 +1,8 @@
 """The summary of a failed run: which poses finished, and the error line of each that did not."""
 
-from posefix.workflow.partial_summary import finished_poses, pose_errors
+import sys
+
+from posefix.workflow.partial_summary import finished_poses, pose_errors, stage_finished
 
 
 def test_a_pose_finished_when_every_file_it_needs_exists(tmp_path):
@@ -18,3 +20,14 @@ def test_each_failed_pose_gets_the_first_error_line_that_names_its_file_or_folde
     assert pose_errors(["walk", "walk-2", "wal", "run"], lines) == {
         "walk": lines[0], "walk-2": lines[1], "wal": "did not finish (see the log)",
         "run": "did not finish (see the log)"}
+
+
+def test_a_partial_summary_stage_that_fails_says_so_in_one_line_naming_its_log(tmp_path, capsys):
+    """Its output is discarded (its log keeps it), so the line is all the user sees (issue 50)."""
+    script = tmp_path / "overview.py"
+    script.write_text("import sys\nprint('noise')\nsys.exit(1)\n")
+    assert not stage_finished([sys.executable, str(script), "--log", "results/lib/logs/partial-overview.log"])
+    assert capsys.readouterr().err.splitlines() == [
+        "posefix: warning: overview of the poses that finished failed too (see results/lib/logs/partial-overview.log)"]
+    script.write_text("print('noise')\n")
+    assert stage_finished([sys.executable, str(script), "--log", "x.log"]) and capsys.readouterr().err == ""

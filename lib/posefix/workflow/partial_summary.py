@@ -6,6 +6,8 @@ Snakemake runs the summary only when every pose has finished; after a failed run
 """
 
 import re
+import subprocess
+import sys
 from pathlib import Path
 
 
@@ -32,3 +34,14 @@ def _first_naming(pose, lines):
     """The first of ``lines`` that names the file or results folder of ``pose``, else that it did not finish."""
     named = re.compile(rf"(^|[/\\\s]){re.escape(pose)}[./\\]")
     return next((line for line in lines if named.search(line)), "did not finish (see the log)")
+
+
+def stage_finished(command):
+    """Run the stage ``command`` (list of str: the interpreter, the stage's script, its arguments with ``--log
+    <file>``) with its output discarded (its log keeps its lines): whether it finished. Where it did not, one line
+    on stderr names the stage and its log, so that a failed run's partial summary never fails unsaid."""
+    if subprocess.run(command, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL).returncode == 0:
+        return True
+    print(f"posefix: warning: {Path(command[1]).stem} of the poses that finished failed too (see "
+          f"{command[command.index('--log') + 1]})", file=sys.stderr)
+    return False
