@@ -3,6 +3,7 @@
 import fcntl
 import io
 import os
+import signal
 import subprocess
 import sys
 from pathlib import Path
@@ -216,11 +217,17 @@ def start_cluster(config, ids):
         (base / folder).mkdir()
     config.posefix_cluster = test_cluster.BackgroundRun(base / "slurm", base / "cluster-run", base / "cluster.json")
     config.posefix_cluster.start()
+    signal.signal(signal.SIGTERM, _interrupt)  # killed, the session still stops the cluster (pytest_sessionfinish)
 
 
-def pytest_sessionfinish(session):
-    """Stop the SLURM run this process started (always: also after a failure or an interrupt)."""
+def _interrupt(signum, frame):
+    """SIGTERM as Ctrl-C: pytest ends the session as interrupted, and :func:`pytest_sessionfinish` runs."""
+    raise KeyboardInterrupt
+
+
+def pytest_sessionfinish(session, exitstatus):
+    """Stop the SLURM run this process started (always: also after a failure or an interrupt, then at once)."""
     run = getattr(session.config, "posefix_cluster", None)
     if run:
-        run.stop()
+        run.stop(wait=exitstatus != pytest.ExitCode.INTERRUPTED)
 

@@ -29,6 +29,7 @@ import threading
 import time
 from pathlib import Path
 
+import psutil
 import pytest
 import yaml
 
@@ -193,9 +194,15 @@ class BackgroundRun(threading.Thread):
                         f"SLURM jobs:\n{table}")
         return str(self.work), proc.returncode, log, jobs
 
-    def stop(self):
-        """Wait for the run (it is bounded by its timeouts), then stop the cluster."""
-        self.join(timeout=600 + RUN_TIMEOUT + 60)
+    def stop(self, wait=True):
+        """Stop the cluster, after the run when ``wait`` (it is bounded by its timeouts), else at once with the run
+        (an interrupted session)."""
+        if wait:
+            self.join(timeout=600 + RUN_TIMEOUT + 60)
+        else:
+            for child in psutil.Process().children():
+                if str(self.work) in " ".join(child.cmdline()):
+                    child.terminate()  # coreutils' timeout, which passes the signal on to the workflow
         down = _run([CLUSTER / "slurm-down.sh", self.state], 120, env=self.env)
         print(down.stdout, down.stderr, sep="")
 
