@@ -77,6 +77,26 @@ def test_errors_become_one_line_and_an_exit_code(capsys, posefix_logger):
     assert stage_parser("demo", "").parse_args([]).threads == 1
 
 
+def test_the_error_line_reaches_stderr_in_one_write(monkeypatch, posefix_logger):
+    """With its newline: two writes (print's) let another job's line in between on the run's merged output."""
+    writes = []
+
+    class Recorder:
+        def write(self, text):
+            writes.append(text)
+
+        def flush(self):
+            pass
+
+    monkeypatch.setattr("sys.stderr", Recorder())
+
+    def bad_input(args, log):
+        raise InputError("a.obj", "no faces")
+
+    assert _run(bad_input) == 2
+    assert [w for w in writes if "error:" in w or w == "\n"] == ["posefix demo: error: a.obj: no faces\n"]
+
+
 def test_config_flags_are_what_the_stage_parsers_read():
     parser = argparse.ArgumentParser()
     parser.add_argument("--count", type=int)

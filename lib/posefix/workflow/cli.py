@@ -82,8 +82,11 @@ def run_stage(parser, main, argv=None):
 
 def _say_error(line):
     """Print a stage's one error ``line`` to stderr and write it, as it is, to the stage's log file (where plain
-    ``snakemake`` finds it to repeat it at the end of a failed run)."""
-    print(line, file=sys.stderr)
+    ``snakemake`` finds it to repeat it at the end of a failed run). One write of the line with its newline: an
+    unbuffered stderr gets print's two (line, newline), and another job's line then came in between on the run's
+    merged output (a loaded `make test` saw "... (OBJ indices start at 1)23:20:50 posefix skeleton: ...")."""
+    sys.stderr.write(line + "\n")
+    sys.stderr.flush()
     for handler in logging.getLogger("posefix").handlers:
         if isinstance(handler, logging.FileHandler):
             handler.stream.write(line + "\n")
