@@ -9,7 +9,7 @@ LOAD_KWARGS = {}
 
 def declared_counts(data):
     """Vertex and face counts of the OFF header, ``(nv, nf)``; None where the header has none."""
-    tokens = re.sub(rb"#[^\n]*", b"", data[:4096]).split()
+    tokens = _uncommented(data[:4096]).split()
     if len(tokens) >= 3 and tokens[0].upper().endswith(b"OFF") and tokens[1].isdigit() and tokens[2].isdigit():
         return int(tokens[1]), int(tokens[2])
     return None, None
@@ -21,11 +21,15 @@ def check(path, data):
     nv, _ = declared_counts(data)
     if nv is None:
         return
-    lines = re.sub(rb"#[^\n]*", b"", data).splitlines()
-    lines = [line for line in lines if line.strip()]
+    lines = [line for line in _uncommented(data).splitlines() if line.strip()]
     body = lines[1 if len(lines[0].split()) >= 3 else 2:]  # after "OFF nv nf ne" on one line, or the counts next
     if body and len(body[0].split()) == 3:
         check_vertex_rows(path, b"\n".join(body), nv, 3)
+
+
+def _uncommented(data):
+    """OFF bytes without their ``#`` comments."""
+    return re.sub(rb"#[^\n]*", b"", data)
 
 
 def encode(V, F):
