@@ -1,7 +1,7 @@
 """The workflow on pose libraries in one USD or glTF file (issue 31): the demo limb (at 20 vertices per ring instead
 of 40, 802 vertices: a quicker repair) stored as USD frames, USD blend shapes and glTF morph targets repairs exactly
-as the same coordinates in OBJ files, and each repair goes back into a file of the input's kind. (The lion library as one USD and one GLB file against its folder: `make bench`,
-benchmarks/containers.py.)"""
+as the same coordinates in OBJ files, and each repair goes back into a file of the input's kind. (The lion library
+as one USD and one GLB file against its folder: `make bench`, benchmarks/containers.py.)"""
 
 import json
 
