@@ -11,6 +11,7 @@ import numpy as np
 
 from posefix.contact.keyframe_tracking import track_keyframes
 from posefix.mesh.contact_solver import ContactSolver
+from posefix.mesh.geometry import unit_scale
 from posefix.mesh.intersections import intersecting_faces
 from posefix.io.artifacts import read_artifact, write_artifact
 from posefix.workflow.cli import run_stage, stage_parser
@@ -42,19 +43,20 @@ def main(args, log):
         kf, _ = read_artifact(args.keyframes, "keyframes", ["frames", "faces", "reference", "target"])
         cl, _ = read_artifact(args.classify, "classify", ["pairs", "pair_offsets"])
     frames, F = np.concatenate([kf["reference"][None], kf["frames"][1:-1], kf["target"][None]]), kf["faces"]
+    unit = unit_scale(frames[0])  # the working unit: a library at 1e-30 or 1e+30 repairs as at 1
     reference_pairs = split_frames(cl["pairs"], cl["pair_offsets"])[0]
     reference_faces = intersecting_faces(reference_pairs, len(F))
     settings, params = contact_settings(args)
     with timings.step("prepare"):
-        solver = ContactSolver(frames[0], F, reference_pairs, settings, args.threads)
+        solver = ContactSolver(unit * frames[0], F, reference_pairs, settings, args.threads)
     with timings.step("repair"):
-        result = track_keyframes(solver, frames, reference_faces)
+        result = track_keyframes(solver, unit * frames, reference_faces)
     metrics = result.metrics | {"intersecting_faces_reference": int(reference_faces.sum()),
                                 "intersecting_faces_repaired": int(result.faces.sum()),
                                 "intersecting_faces_repaired_new": int(result.new_faces.sum()),
                                 "seconds": timings["prepare"] + timings["repair"]}
     write_artifact(args.out, "repair_contact",
-                   {"start": frames[-1], "repaired": result.X, "contact": result.contact,
+                   {"start": frames[-1], "repaired": result.X / unit, "contact": result.contact,
                     "new_faces": result.new_faces},
                    params=params, inputs=[args.keyframes, args.classify], timings=timings, metrics=metrics, docs=DOCS)
 

@@ -17,6 +17,7 @@ from dataclasses import asdict
 import posefix.workflow.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; runtime defaults before numpy)
 
 from posefix.mesh.contact_solver import ContactSolver
+from posefix.mesh.geometry import unit_scale
 from posefix.io.artifacts import read_artifact, write_artifact
 from posefix.workflow.cli import run_stage, stage_parser
 from posefix.workflow.contact_options import add_contact_options, contact_settings
@@ -94,16 +95,18 @@ def main(args, log):
         cl, _ = read_artifact(args.classify, "classify", ["mask", "pairs", "pair_offsets"])
         it, _ = read_artifact(args.integrate, "integrate", ["positions", "samples"])
         _, fattrs = read_artifact(args.fit, "fit", [])
-    problem = RepairProblem.build(kf["reference"], kf["target"], kf["faces"], cl["mask"],
+    unit = unit_scale(kf["reference"])  # the working unit: a library at 1e-30 or 1e+30 repairs as at 1
+    problem = RepairProblem.build(unit * kf["reference"], unit * kf["target"], kf["faces"], cl["mask"],
                                   split_frames(cl["pairs"], cl["pair_offsets"]))
     settings = RepairSettings(args.finish, args.fallback_eps, args.fallback_fit, args.ring, args.max_rings,
                               args.repair_new, args.reproduce)
-    result, params = _finish(args, problem, (it, kf["frames"]), fattrs, settings)
+    result, params = _finish(args, problem, (it, kf["frames"], unit), fattrs, settings)
     timings.update(result.seconds)
     _say_what_was_left(json.loads(kattrs["inputs"])[-1], result.metrics, log)
     write_artifact(
         args.out, "verify",
-        {"integrated_deviation": result.integrated_deviation, "repaired": result.X, "deviation": result.deviation,
+        {"integrated_deviation": result.integrated_deviation, "repaired": result.X / unit,
+         "deviation": result.deviation,
          "replaced": result.replaced, "new_faces": result.new, "pairs": result.pairs},
         params=params,
         inputs=[args.keyframes, args.classify, args.integrate, args.fit], timings=timings,
@@ -127,20 +130,21 @@ def _say_what_was_left(target, metrics, log):
 
 
 def _finish(args, problem, integrated, fit_attrs, settings):
-    """(RepairResult, params) of the finish ``settings.finish`` of the integrated pose; ``integrated``: (integrate.h5's
-    arrays, the key frames (K, n, 3))."""
-    integrated, frames = integrated
-    d = float(fit_attrs["metrics"]["bbox_diagonal"])
+    """(RepairResult, params) of the finish ``settings.finish`` of the integrated pose, in the working unit;
+    ``integrated``: (integrate.h5's arrays, the key frames (K, n, 3), the working unit (lengths times it: ``problem``'s
+    are))."""
+    integrated, frames, unit = integrated
+    d = unit * float(fit_attrs["metrics"]["bbox_diagonal"])
     if settings.finish == "snap":
         eps = json.loads(fit_attrs["config"])["eps_rel"] * d
-        result = repair_pose(problem, integrated["positions"], d, eps, float(fit_attrs["metrics"]["max_error_rel"]),
-                             settings)
+        result = repair_pose(problem, unit * integrated["positions"], d, eps,
+                             float(fit_attrs["metrics"]["max_error_rel"]), settings)
         return result, asdict(settings)
     contact, contact_params = contact_settings(args)
     finish = FinishSettings(args.free_goal, args.constrained_weight, args.untangle_rings, args.elastic_weight,
                             args.bending, args.rest_limit, args.tracked_iterations)
     solver = ContactSolver(problem.V_ref, problem.F, problem.frame_pairs[0], contact, args.threads)
-    result = finish_pose(problem, integrated["samples"], d, solver, finish, frames)
+    result = finish_pose(problem, unit * integrated["samples"], d, solver, finish, unit * frames)
     return result, {"finish": "contact"} | asdict(finish) | contact_params
 
 

@@ -19,6 +19,34 @@ def bbox_diagonal(V):
     return float(np.linalg.norm(V.max(axis=0) - V.min(axis=0)))
 
 
+def unit_scale(V):
+    """The power of two that brings the bounding-box diagonal of ``V`` into [1/sqrt(2), sqrt(2)): the working unit
+    of the contact solver and the finish.
+
+    A library at 1e-30 or 1e+30 then meets the absolute constants of third-party numerics (ipctk's CCD gaps and PSD
+    projection, at 1e-30: "unable to project matrix onto positive semi-definite cone") as at 1. Multiplying by a
+    power of two is exact in floating point (and commutes with rounding to float32), so positions scaled back by it
+    are exactly those at the working scale, scaled.
+
+    Parameters
+    ----------
+    V : (n, 3) float
+        Vertex positions.
+
+    Returns
+    -------
+    float
+        ``2^-k`` with ``k`` the nearest integer to ``log2`` of the diagonal (1 for a diagonal of 0 or not finite).
+
+    Examples
+    --------
+    >>> unit_scale(np.array([[0.0, 0, 0], [3e-30, 4e-30, 0]])) * 5e-30
+    0.7922816251426433
+    """
+    d = bbox_diagonal(V)
+    return float(2.0 ** -round(np.log2(d))) if np.isfinite(d) and d > 0 else 1.0
+
+
 def edge_lengths(V, E):
     """Lengths of edges ``E`` (e, 2) int of vertices ``V`` (n, 3) float, (e,) float."""
     return np.linalg.norm(V[E[:, 1]] - V[E[:, 0]], axis=1)
