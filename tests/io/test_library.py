@@ -158,6 +158,18 @@ def test_degenerate_reference_face(tmp_path, library):
     _expect_error(tmp_path, folder, "sphere-reference.obj", "degenerate faces", "face 7")
 
 
+def test_vertices_in_no_face_are_refused_in_one_line_naming_them(tmp_path, library):
+    """Before: the fit ended in "Factor is exactly singular"."""
+    folder, V, F = library
+    extra = np.vstack([V, [[2.0, 0, 0], [0, 2.0, 0]]])
+    for name in ("sphere-reference.obj", "a.obj", "b.off"):
+        write_mesh(folder / name, extra, F)
+    line = _expect_error(tmp_path, folder)
+    assert line == (f"posefix validate: error: {folder / 'sphere-reference.obj'}: reference has 2 vertices in no face "
+                    f"({len(V)}, {len(V) + 1}): a loose vertex has no surface to move with (remove it from the "
+                    "library's meshes)")
+
+
 def test_zero_area_reference_face(tmp_path, library):
     folder, V, F = library
     bad = V.copy()

@@ -248,7 +248,8 @@ def _pick_reference(folder, files, by_name, reference):
 
 def check_reference(path, V, F):
     """Raise :class:`InputError` when the reference is too small for the space-time fit (fewer than
-    :data:`MIN_REFERENCE_VERTICES` vertices) or has degenerate or zero-area faces."""
+    :data:`MIN_REFERENCE_VERTICES` vertices), has vertices in no face (the solvers' Laplacians would be singular
+    there: "Factor is exactly singular") or degenerate or zero-area faces."""
     if len(V) < MIN_REFERENCE_VERTICES:
         raise InputError(path, f"reference has {len(V)} vertices: the repair needs at least "
                                f"{MIN_REFERENCE_VERTICES} (the terms of the fit's quadratic space-time polynomial)")
@@ -256,6 +257,11 @@ def check_reference(path, V, F):
     if repeated.any():
         f = int(np.argmax(repeated))
         raise InputError(path, f"reference has {repeated.sum()} degenerate faces repeating a vertex (first: face {f} {F[f].tolist()})")
+    unused = np.setdiff1d(np.arange(len(V)), F)
+    if len(unused):
+        listed = ", ".join(map(str, unused[:10])) + (f" and {len(unused) - 10} more" if len(unused) > 10 else "")
+        raise InputError(path, f"reference has {len(unused)} vertices in no face ({listed}): a loose vertex has no "
+                               "surface to move with (remove it from the library's meshes)")
     d = bbox_diagonal(V)
     tiny = face_areas(V, F) <= DEGENERATE_AREA_REL * d * d
     if tiny.any():
