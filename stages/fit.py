@@ -11,6 +11,7 @@ rule on the same constraints continues from it too). See ``posefix.spacetime.fit
 
 import argparse
 import json
+from contextlib import contextmanager
 from pathlib import Path
 
 import posefix.workflow.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; runtime defaults before numpy)
@@ -77,6 +78,15 @@ def build_parser():
     return parser
 
 
+@contextmanager
+def _refused_as_input(path):
+    """Within: a :class:`FactorizationError` (constraints that make no well-posed fit) is an InputError on ``path``."""
+    try:
+        yield
+    except FactorizationError as exc:
+        raise InputError(path, str(exc)) from None
+
+
 def main(args, log):
     if args.max_centers < 16 or args.batch < 1 or args.candidates < args.batch or args.eps_rel < 0:
         raise InputError("arguments", "need --max-centers >= 16, --batch >= 1, --candidates >= --batch, --eps-rel >= 0")
@@ -95,12 +105,9 @@ def main(args, log):
     key = config_hash({"constraints": file_sha256(args.constraints), **settings.selection_key()})
     log.info("%d constraints; eps = %.3g (%.3g d), max %d centres, %s selection, %s update",
              len(points), settings.eps, args.eps_rel, args.max_centers, args.selection, args.update)
-    with checkpoint.locked(folder):
+    with checkpoint.locked(folder), _refused_as_input(args.constraints):
         with timings.step("start"):
-            try:
-                fit, resumed = checkpoint.start_or_resume(points, values, settings, folder, key, device)
-            except FactorizationError as exc:
-                raise InputError(args.constraints, str(exc)) from None
+            fit, resumed = checkpoint.start_or_resume(points, values, settings, folder, key, device)
         with timings.step("iterate"):
             reason = iterate(fit, on_iteration=checkpoint.committer(folder, key, _settings_dict(settings), fit,
                                                                     resumed))

@@ -68,6 +68,10 @@ def main(args, log):
             X1, samples, steps, rejected = rk45(field_velocity(field, tau), X0, atol=args.atol_rel * d,
                                                 rtol=args.rtol, h0=args.h0, sample_times=times)
     log.info("steps per vertex: mean %.1f, max %d; rejected: %d in all", steps.mean(), steps.max(), rejected.sum())
+    lost = ~(np.isfinite(samples).all(axis=(0, 2)) & np.isfinite(X1).all(axis=1))
+    if lost.any():  # (either backend)
+        raise InputError(args.fit, f"the path lines of {lost.sum()} vertices are not finite (first: vertex "
+                                   f"{np.argmax(lost)}): the fitted field is degenerate")
     write_artifact(
         args.out, "integrate",
         {"positions": X1, "samples": samples, "sample_times": times, "steps": steps, "rejected": rejected},

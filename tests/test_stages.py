@@ -344,3 +344,20 @@ def test_ctrl_c_during_a_stage_s_imports_exits_quietly_with_130():
     import subprocess
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT / "stages")
     assert proc.returncode == 130 and proc.stderr == "posefix render: interrupted; no output written\n"
+
+
+def test_integrate_refuses_path_lines_that_are_not_finite_in_one_line(demo_artifacts, tmp_path):
+    """A field that gives NaN (before: a float32 sphere scaled by 1.1 made one; verify then ended in "cannot convert
+    float NaN to integer"): integrate stops with one line naming the fit, and writes nothing."""
+    import shutil
+    fit = tmp_path / "fit.h5"
+    shutil.copy(demo_artifacts / "fit.h5", fit)
+    with h5py.File(fit, "r+") as fh:
+        fh["weights"][0, 0] = np.nan
+    proc = run_stage("integrate", "--fit", fit, "--keyframes", demo_artifacts / "keyframes.h5",
+                     "--out", tmp_path / "integrate.h5", check=False)
+    lines = [line for line in proc.stderr.splitlines() if "error:" in line]
+    assert proc.returncode == 2 and not (tmp_path / "integrate.h5").exists(), proc.stderr
+    assert len(lines) == 1 and re.fullmatch(
+        rf"posefix integrate: error: {re.escape(str(fit))}: the path lines of \d+ vertices are not finite \(first: "
+        r"vertex 0\): the fitted field is degenerate", lines[0]), lines

@@ -14,6 +14,7 @@ from conftest import ROOT, run_stage, smooth_field_problem
 from posefix.io.artifacts import write_artifact
 from posefix.spacetime.fit import (FitSettings, _diameter_pair, farthest_points, iterate, resume_fit, start_fit,
                                    truncate_history)
+from posefix.spacetime.factorization import FactorizationError
 
 
 
@@ -136,3 +137,16 @@ def test_fit_stage_killed_and_rerun_continues_to_the_same_result(tmp_path):
         assert a["metrics"].attrs["resumed_iterations"] >= 4
         for name in ("center_index", "weights", "poly", "history/max_error"):
             assert np.array_equal(a[name][()], b[name][()]), name
+
+
+def test_constraints_near_one_quadric_are_refused_at_the_first_solve():
+    """Points of a sphere scaled uniformly over time, rounded to float32 (|x|^2 = (1 + t / 10)^2: a quadric of
+    space-time, 1e-8 off): the start's exact-quadric check passes them, and the first solve's condition number is
+    beyond MAX_CONDITION (before: NaN path lines from the fitted field)."""
+    rng = np.random.default_rng(1)
+    x = rng.normal(size=(1500, 3))
+    t = rng.uniform(0, 1, size=(1500, 1))
+    Y = np.hstack([(x / np.linalg.norm(x, axis=1, keepdims=True)) * (1 + 0.1 * t), t]).astype(np.float32)
+    fit = start_fit(Y.astype(np.float64), 0.1 * Y[:, :3].astype(np.float64), FitSettings(eps=1e-9, batch=64))
+    with pytest.raises(FactorizationError, match=r"nearly singular at 64 centres \(condition number .*, beyond 1e\+13\)"):
+        iterate(fit)

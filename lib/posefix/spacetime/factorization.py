@@ -33,6 +33,14 @@ class FactorizationError(Exception):
     """The centres do not make a well-posed system (e.g. no 15 unisolvent centres)."""
 
 
+MAX_CONDITION = 1e13
+"""Largest condition number ``kappa_1(A)`` of a fit's system: beyond it the fit is refused
+(:func:`posefix.spacetime.fit.iterate`). The largest measured on real libraries is 1.1e11 (cat, reports/bench/
+fit-cat-poses.md; 4.5e9 with the defaults); constraint points near one quadric of space-time, which the quadratic
+tail cannot tell apart (a float32 sphere scaled uniformly by 1.1), gave 4.2e14-9.0e14 from the first solve, and path
+lines with NaN after it. An exact quadric is refused earlier, by :func:`posefix.spacetime.fit.start_fit`."""
+
+
 def hager_inverse_norm(solve, size, iterations=5):
     """Estimate ``||A^{-1}||_1`` of a symmetric matrix from solves (Hager 1984, Higham 1988).
 
