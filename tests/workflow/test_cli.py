@@ -114,6 +114,8 @@ def test_config_flags_are_what_the_stage_parsers_read():
 
 
 def test_an_unexpected_error_reaches_the_log_file(tmp_path, capsys, posefix_logger):
+    """Its one error line too (before: the posefix command said "the run failed before any stage reported" when a
+    stage crashed)."""
     def bug(args, log):
         raise ZeroDivisionError("a bug")
 
@@ -124,3 +126,6 @@ def test_an_unexpected_error_reaches_the_log_file(tmp_path, capsys, posefix_logg
         handler.flush()
     text = (tmp_path / "demo.log").read_text()
     assert "unexpected error" in text and "ZeroDivisionError: a bug" in text
+    line = (f"posefix demo: error: unexpected ZeroDivisionError: a bug (a bug in posefix: please report it; its "
+            f"traceback: {tmp_path / 'demo.log'})")
+    assert line in text.splitlines() and line in capsys.readouterr().err.splitlines()  # the posefix command shows it

@@ -74,8 +74,11 @@ def run_stage(parser, main, argv=None):
     except KeyboardInterrupt:
         print(f"posefix {args.stage}: interrupted; no output written", file=sys.stderr)
         sys.exit(130)
-    except Exception:  # a bug: the traceback to stderr (Python's) and to the log file
+    except Exception as exc:  # a bug: one line, then the traceback to stderr (Python's) and to the log file
         log.debug("unexpected error", exc_info=True)
+        where = f"; its traceback: {args.log}" if args.log else ""
+        _say_error(f"posefix {args.stage}: error: unexpected {type(exc).__name__}: {exc} (a bug in posefix: please "
+                   f"report it{where})")
         raise
     log.info("done in %.2f s", time.perf_counter() - start)
 
