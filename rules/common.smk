@@ -12,7 +12,7 @@ from posefix.workflow import demo
 from posefix.workflow.cli import config_flags, named_options, put_interpreter_first_on_path
 from posefix.workflow.command import failed_job_errors, recap_line
 from posefix.workflow.partial_summary import finished_poses, pose_errors, stage_finished
-from posefix.workflow.config_check import config_problems, typed_by_schema
+from posefix.workflow.config_check import config_problems, folder_problems, typed_by_schema
 from posefix.io.errors import InputError
 from posefix.workflow.fingerprint import CodeFingerprints
 from posefix.io.artifacts import read_artifact
@@ -33,6 +33,9 @@ if _problems:  # one line per problem, naming the key; no schema dump
 validate(config, "../schemas/config.schema.yaml")  # fills in the schema's defaults
 
 if workflow.is_main_process:  # not in the jobs a cluster executor starts: they cannot see the main process
+    _unwritable = folder_problems(config)
+    if _unwritable:  # before anything runs (Snakemake itself would stop where the first file is written there)
+        sys.exit("\n".join(f"posefix: error: config: {p}" for p in _unwritable))
     _stale = clear_stale_locks(".")
     if _stale:
         print(f"posefix: removed {len(_stale)} stale Snakemake lock(s) of an interrupted run in {Path.cwd()} "

@@ -191,6 +191,20 @@ def test_missing_reference_fails_at_startup(tmp_path):
     assert "Traceback" not in proc.stderr and not (tmp_path / "results").exists()
 
 
+def test_results_and_reports_that_cannot_be_written_are_refused_before_any_job_in_one_line_each(tmp_path):
+    """Before: reports= on an impossible path failed at 70 % of the jobs ("WorkflowError: Failed to create output
+    directory"), after every repair had run."""
+    (tmp_path / "a-file").write_text("")
+    proc = snakemake(tmp_path, "--config", "results=/proc/posefix", "reports=a-file/reports")
+    errors = [line for line in proc.stderr.splitlines() if "error" in line.lower()]
+    assert proc.returncode == 1 and errors == [
+        "posefix: error: config: results=/proc/posefix: /proc/posefix cannot be made: /proc takes no new folder (No "
+        "such file or directory)",
+        f"posefix: error: config: reports=a-file/reports: a-file/reports cannot be made: {tmp_path / 'a-file'} is a "
+        "file"], proc.stderr
+    assert not (tmp_path / "data").exists()  # no job ran (the demo library not written)
+
+
 def test_an_unreadable_reference_is_refused_at_startup_in_one_line(tmp_path):
     """Before the memory check and before any job (issue 50): the reference's own one line."""
     lib = tmp_path / "lib"

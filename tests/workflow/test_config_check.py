@@ -6,7 +6,7 @@ import pytest
 import yaml
 
 from conftest import ROOT
-from posefix.workflow.config_check import config_problems, typed_by_schema
+from posefix.workflow.config_check import config_problems, folder_problem, folder_problems, typed_by_schema
 
 SCHEMA = yaml.safe_load((ROOT / "schemas" / "config.schema.yaml").read_text())
 CONFIG = yaml.safe_load((ROOT / "config.yaml").read_text())
@@ -51,3 +51,13 @@ def test_a_name_that_is_not_a_plain_folder_name_is_refused_in_one_line(name):
     assert config_problems({"name": name}, SCHEMA) == [
         f"name: {name!r} is not a plain name (letters, digits, '.', '_' and '-', not starting with '.')"]
     assert config_problems({"name": "lion-2.b_1"}, SCHEMA) == []
+
+
+def test_a_folder_that_cannot_be_made_is_one_line_naming_why(tmp_path):
+    (tmp_path / "a-file").write_text("")
+    assert folder_problem(tmp_path / "new" / "deeper") is None and not (tmp_path / "new").exists()
+    assert folder_problem(tmp_path / "a-file" / "reports") == f"{tmp_path / 'a-file' / 'reports'} cannot be made: " \
+                                                              f"{tmp_path / 'a-file'} is a file"
+    assert folder_problems({"results": "/proc/posefix", "reports": str(tmp_path)}) == [
+        "results=/proc/posefix: /proc/posefix cannot be made: /proc takes no new folder (No such file or directory)"]
+    assert list(tmp_path.iterdir()) == [tmp_path / "a-file"]  # the folders made to try are gone

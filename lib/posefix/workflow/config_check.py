@@ -5,6 +5,9 @@ own messages name the key only in a schema dump many lines below (``1 is less th
 """
 
 import difflib
+import os
+import tempfile
+from pathlib import Path
 
 import jsonschema
 import yaml
@@ -27,6 +30,32 @@ def config_problems(config, schema):
     for error in validator.iter_errors(config):
         lines += _describe(error)
     return sorted(set(lines))
+
+
+def folder_problem(path):
+    """Why no file can be written under the folder ``path`` (str), or None: a folder is made and removed in it, or,
+    where it does not exist yet, in its nearest parent that does (the run would make it there).
+
+    Examples
+    --------
+    >>> folder_problem("/proc/posefix-results")
+    '/proc/posefix-results cannot be made: /proc takes no new folder (No such file or directory)'
+    """
+    nearest = Path(os.path.abspath(path))
+    while not nearest.exists():
+        nearest = nearest.parent
+    if not nearest.is_dir():
+        return f"{path} cannot be made: {nearest} is a file"
+    try:
+        os.rmdir(tempfile.mkdtemp(prefix=".posefix-", dir=nearest))
+    except OSError as exc:
+        return f"{path} cannot be made: {nearest} takes no new folder ({exc.strerror or exc})"
+    return None
+
+
+def folder_problems(config, keys=("results", "reports")):
+    """One line per folder of ``config`` (dict; its ``keys``) that cannot be written (:func:`folder_problem`)."""
+    return [f"{key}={config[key]}: {problem}" for key in keys if (problem := folder_problem(config[key]))]
 
 
 def typed_by_schema(value, schema):
