@@ -11,7 +11,7 @@ from snakemake.utils import validate
 from posefix.workflow import demo
 from posefix.workflow.cli import config_flags, named_options, put_interpreter_first_on_path
 from posefix.workflow.command import failed_job_errors, recap_line
-from posefix.workflow.partial_summary import finished_poses, pose_errors, stage_finished
+from posefix.workflow.partial_summary import finished_poses, pose_errors, stage_finished, stale_files
 from posefix.workflow.config_check import config_problems, folder_problems, typed_by_schema
 from posefix.io.errors import InputError
 from posefix.workflow.fingerprint import CodeFingerprints
@@ -245,6 +245,12 @@ def pose_figure(figure):
     )
 
 
+def _out_of_date(required):
+    """The files of ``required`` (dict: pose -> paths) that this code and these inputs would make again (set)."""
+    return stale_files(workflow.main_snakefile, config | {"poses": list(required)},
+                       [p for paths in required.values() for p in paths])
+
+
 def summary_inputs(pose):
     """The files of ``pose`` that the library's summary reads (the pose has finished when they all exist)."""
     return ([f"{RESULTS}/{pose}/{a}.h5" for a in ("keyframes", "classify", "verify", "downstream")]
@@ -253,12 +259,12 @@ def summary_inputs(pose):
 
 def _summary_poses():
     """The poses of the library's summary, in library order: this run's, and those of the folder that an earlier
-    run finished (a repair of some poses adds them to the summary rather than replacing it; those are read as they
-    are, not rerun)."""
+    run finished and that are still up to date (a repair of some poses adds them to the summary rather than replacing
+    it; those are read as they are, not rerun)."""
     if not config["poses"]:
         return POSES
-    earlier = [p.name for p in WHOLE_LIBRARY.poses if p.name not in POSES]
-    finished, _ = finished_poses({p: summary_inputs(p) for p in earlier})
+    earlier = {p.name: summary_inputs(p.name) for p in WHOLE_LIBRARY.poses if p.name not in POSES}
+    finished, _ = finished_poses(earlier, _out_of_date(earlier) if workflow.is_main_process else set())
     return [p.name for p in WHOLE_LIBRARY.poses if p.name in POSES or p.name in finished]
 
 
@@ -292,7 +298,8 @@ def get_final_output():
 def partial_summary(errors):
     """After a failed run: the summary, overview and 3D viewer of the poses that finished, the others listed with
     their error line (``errors``: the posefix error lines of the failed jobs); nothing when no pose finished."""
-    finished, unfinished = finished_poses({p: summary_inputs(p) for p in SUMMARY_POSES})
+    required = {p: summary_inputs(p) for p in SUMMARY_POSES}
+    finished, unfinished = finished_poses(required, _out_of_date(required))
     if not finished or not unfinished:
         return
     failed = [f"--failed={pose}={line}" for pose, line in pose_errors(unfinished, errors).items()]
@@ -319,7 +326,8 @@ def partial_containers():
     """After a failed run of a USD or glTF library: the file of each repair with the poses that finished repaired
     and the others as in the input (stage pack), so that one bad pose does not hold back the others."""
     for repair in ["repaired", *[f"repaired-{b}" for b in BASELINES]] if LIBRARY.container else ():
-        done = [p for p in SUMMARY_POSES if Path(f"{RESULTS}/{repair}/{p}.ply").is_file()]
+        required = {p: [f"{RESULTS}/{repair}/{p}.ply"] for p in SUMMARY_POSES}
+        done, _ = finished_poses(required, _out_of_date(required))
         out = f"{RESULTS}/{repair}/{os.path.basename(LIBRARY.container)}"
         if not done or len(done) == len(SUMMARY_POSES):
             continue

@@ -388,6 +388,26 @@ def test_a_library_at_1e_minus_30_or_1e_plus_30_repairs_as_at_1(tmp_path):
                 assert a["deviation"] == pytest.approx(b["deviation"], rel=0, abs=1e-9), (scale, ours["pose"])
 
 
+def test_a_pose_that_fails_now_is_not_taken_as_finished_from_an_earlier_runs_files(tmp_path):
+    """ball-02 repaired, then made unreadable: the second run fails in its validate and leaves its earlier artifacts
+    in place (verify.h5, the repaired mesh). Finished means finished by this code and these inputs (Snakemake's own
+    rerun triggers), not that the files exist: the partial summary lists ball-02 as failed, not as repaired."""
+    library = tmp_path / "lib"
+    V, F = icosphere(2)
+    write_mesh(library / "ball-reference.obj", V, F)
+    write_mesh(library / "ball-01.obj", V * [1.2, 1.0, 0.9], F)
+    write_mesh(library / "ball-02.obj", V * [0.9, 1.1, 1.0], F)
+    assert snakemake(tmp_path, "--config", f"library={library}", "baselines=[]").returncode == 0
+    nan = V * [0.9, 1.1, 1.0]
+    nan[3, 1] = np.nan
+    write_mesh(library / "ball-02.obj", nan, F)
+    proc = snakemake(tmp_path, "--config", f"library={library}", "baselines=[]")
+    assert proc.returncode == 1 and (tmp_path / "results" / "lib" / "ball-02" / "verify.h5").exists(), proc.stderr
+    summary = json.loads((tmp_path / "reports" / "lib" / "summary.json").read_text())
+    assert [e["pose"] for e in summary["poses"]] == ["ball-01"], proc.stderr[-3000:]
+    assert [e["pose"] for e in summary["failed"]] == ["ball-02"] and "vertex 3" in summary["failed"][0]["error"]
+
+
 def _bad_poses(library, V, F):
     """Pose files that cannot be repaired, each in its own way: {file name: what its error line must say}."""
     far = V.copy()

@@ -5,17 +5,65 @@ Snakemake runs the summary only when every pose has finished; after a failed run
 ``--failed``), and the run still exits with an error.
 """
 
+import json
+import os
 import re
 import subprocess
 import sys
+import tempfile
 from pathlib import Path
 
+NESTED = "POSEFIX_STALE_CHECK"
+"""Set in the environment of :func:`stale_files`' own Snakemake run: the workflow parsed there checks no staleness
+itself (it would start another)."""
 
-def finished_poses(required):
+
+def finished_poses(required, stale=frozenset()):
     """``(finished, unfinished)``: the poses (lists, in the given order) whose ``required`` files (dict: pose -> list
-    of paths) all exist, and the others."""
-    finished = [pose for pose, paths in required.items() if all(Path(p).is_file() for p in paths)]
+    of paths) all exist and none of which is ``stale`` (:func:`stale_files`), and the others."""
+    finished = [pose for pose, paths in required.items()
+                if all(Path(p).is_file() and str(p) not in stale for p in paths)]
     return finished, [pose for pose in required if pose not in finished]
+
+
+def stale_files(snakefile, config, files):
+    """Of ``files`` (list of str: outputs of the workflow, relative to the working folder), those that exist but that
+    this code and these inputs would make again: Snakemake's own rerun triggers (changed code, parameters, input
+    files), from the ``--summary`` table of a run of ``snakefile`` with ``config`` (dict: the whole config), set of
+    str. A file made by an earlier run and out of date since (its pose changed, and failed now) is never taken as
+    this run's. Empty where the check itself is nested in one (:data:`NESTED`) or cannot run."""
+    existing = [str(f) for f in files if Path(f).is_file()]
+    if os.environ.get(NESTED) or not existing:
+        return set()
+    with tempfile.NamedTemporaryFile("w", suffix=".json", delete=False) as handle:
+        json.dump(config, handle)
+    try:
+        proc = subprocess.run([sys.executable, "-m", "snakemake", "-s", str(snakefile), "--configfile", handle.name,
+                               "--summary", "--nolock", *existing], capture_output=True, text=True,
+                              env=os.environ | {NESTED: "1"})
+    finally:
+        os.unlink(handle.name)
+    if proc.returncode != 0:
+        print(f"posefix: warning: could not tell which earlier results are out of date (taken as they are): "
+              f"{proc.stderr.strip().splitlines()[-1:] or proc.returncode}", file=sys.stderr)
+        return set()
+    return planned_updates(proc.stdout)
+
+
+def planned_updates(table):
+    r"""The files that Snakemake's ``--summary`` ``table`` (str, tab-separated, a header line first) plans to make
+    again (its last column is not "no update"), set of str.
+
+    Examples
+    --------
+    >>> planned_updates("output_file\tdate\trule\tlog-file(s)\tstatus\tplan\n"
+    ...                 "r/a/verify.h5\tMon\tverify\tr/a.log\tparams changed\tupdate pending\n"
+    ...                 "r/b/verify.h5\tMon\tverify\tr/b.log\tok\tno update\n")
+    {'r/a/verify.h5'}
+    """
+    rows = [line.split("\t") for line in table.splitlines()]
+    start = next((i + 1 for i, row in enumerate(rows) if row[:1] == ["output_file"]), len(rows))
+    return {row[0] for row in rows[start:] if len(row) >= 6 and row[5] != "no update"}
 
 
 def pose_errors(poses, error_lines):
