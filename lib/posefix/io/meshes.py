@@ -122,11 +122,12 @@ def _read_bytes(mf):
 
 
 def _check_mesh(path, V, F, declared):
-    if len(V) == 0:
-        raise InputError(path, "no vertices")
-    if len(F) == 0:
-        raise InputError(path, "no faces")
     nv, nf = declared
+    if len(V) == 0 and not nv:
+        raise InputError(path, "no vertices")
+    if len(F) == 0:  # (trimesh drops the vertices of a file without faces)
+        raise InputError(path, f"no faces ({nv} vertices and no face: points, not a triangle mesh)" if nv else
+                         "no faces")
     if nv is not None and nv != len(V):
         raise InputError(path, f"file declares {nv} vertices but {len(V)} were read")
     if nf is not None and nf != len(F):

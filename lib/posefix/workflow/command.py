@@ -36,15 +36,24 @@ FAILURES = (
     (re.compile(r"(?P<cause>.*No space left on device.*)"),
      "no space left on device ({cause}); free some disk, then run the same command again"),
     (re.compile(r"(?P<cause>.*Permission denied.*)"), "permission denied ({cause})"),
-    (re.compile(r"(?P<cause>(WildcardError|MissingInputException|Missing input files|WorkflowError|"
-                r"SyntaxError|ValueError|KeyError)\b.*)"), "{cause}"),
+    (re.compile(r"(?P<cause>profile directory given \(.*\), but no profile.yaml \(or config.yaml\) found)"),
+     "Snakemake: {cause} (a --profile or SNAKEMAKE_PROFILE that names no profile)"),
+    (re.compile(r"^\s*(?P<cause>(WildcardError|MissingInputException|Missing input files|WorkflowError|"
+                r"SyntaxError|ValueError|KeyError)\b.*)"), "{cause}"),  # (not a traceback's "raise ValueError(")
 )
 """Snakemake failures that precede or stop the jobs (no stage wrote a posefix line), as one line each: a pattern
 of the log and its message (``folder``: the run's folder; ``cause``: the matched log line)."""
 
 
+class _OneLineParser(argparse.ArgumentParser):
+    """argparse's parser, whose errors are one line (argparse's own: its usage, several lines, then the error)."""
+
+    def error(self, message):
+        self.exit(2, f"posefix: error: {message} (see {self.prog} --help)\n")
+
+
 def build_parser():
-    parser = argparse.ArgumentParser(prog="posefix", description=__doc__.split("\n\n")[0].replace("``", ""))
+    parser = _OneLineParser(prog="posefix", description=__doc__.split("\n\n")[0].replace("``", ""))
     commands = parser.add_subparsers(dest="command", required=True)
     repair = commands.add_parser("repair", help="repair a pose library (the whole workflow)")
     report = commands.add_parser("report", help="the HTML report of a repaired library")
@@ -68,7 +77,7 @@ def snakemake_command(args):
     """The snakemake command line (list of str) for parsed ``args``."""
     library = [f"library={Path(args.library).resolve()}"] if args.library else []
     command = [sys.executable, "-m", "snakemake", "-s", str(WORKFLOW / "Snakefile"), "--config", *library,
-               *args.config]
+               *nested_config(args.config)]
     if args.command == "report":
         return command + report_poses(args) + ["--report", f"reports/{library_name(args)}/report.html"]
     command += ["--cores", str(args.cores)]
@@ -77,6 +86,30 @@ def snakemake_command(args):
     if args.profile:
         command += ["--workflow-profile", str(profile_folder(args.profile))]
     return command + (["--dry-run", "--quiet", "rules"] if args.dry_run else [])
+
+
+def nested_config(entries):
+    """``--config`` entries (list of str) with dotted keys (``fit.batch=64``, which Snakemake refuses: "Config entry
+    must start with a valid identifier") as one nested entry per section (``fit={"batch": "64"}``; Snakemake keeps
+    only the last entry of a key, and the workflow types the text by the schema); the others as they are.
+
+    Examples
+    --------
+    >>> nested_config(["poses=a,b", "fit.batch=64", "fit.eps_rel=1e-3", "verify.finish=snap"])
+    ['poses=a,b', 'fit={"batch": "64", "eps_rel": "1e-3"}', 'verify={"finish": "snap"}']
+    """
+    plain, sections = [], {}
+    for entry in entries:
+        key, _, value = entry.partition("=")
+        if "." not in key:
+            plain.append(entry)
+            continue
+        *path, last = key.split(".")
+        section = sections.setdefault(path[0], {})
+        for name in path[1:]:
+            section = section.setdefault(name, {})
+        section[last] = value
+    return plain + [f"{name}={json.dumps(value)}" for name, value in sections.items()]
 
 
 def report_poses(args):
@@ -119,7 +152,9 @@ def argument_problem(args):
             return f"{args.library}: not a folder, nor a USD or glTF file ({', '.join(CONTAINER_SUFFIXES)})"
         if not Path(args.library).is_file():
             return f"{args.library}: no such file"
-    loose = [entry for entry in args.config if "=" not in entry]
+    loose = [entry for entry in args.config if not re.match(r"[A-Za-z_][\w.]*=", entry)]
+    if loose and "=" in loose[0]:
+        return f"--config {loose[0]}: the key before = is not a config key (KEY=VALUE, e.g. fit.batch=64)"
     if loose:  # --config takes every word after it: a library named after it is one
         return (f"--config {loose[0]}: not KEY=VALUE (name the library before --config: posefix {args.command} "
                 f"<library> --config KEY=VALUE ...)")
@@ -130,6 +165,9 @@ def argument_problem(args):
     if args.command == "repair" and args.profile and not profile_folder(args.profile).is_dir():
         shipped = ", ".join(sorted(p.name for p in (WORKFLOW / "profiles").iterdir() if p.is_dir()))
         return f"--profile {args.profile}: no such profile (shipped: {shipped}; or give a folder)"
+    if args.command == "repair" and args.profile and not any(
+            (profile_folder(args.profile) / name).is_file() for name in ("config.yaml", "profile.yaml")):
+        return f"--profile {args.profile}: the folder has no config.yaml (a Snakemake profile's settings)"
     return None
 
 
@@ -264,6 +302,11 @@ def main(argv=None):
     if problem:
         sys.exit(f"posefix: error: {problem}")
     log_path = Path("posefix-logs") / time.strftime(f"{args.command}-%Y%m%d-%H%M%S.log")
+    try:
+        log_path.parent.mkdir(exist_ok=True)
+    except OSError as exc:
+        sys.exit(f"posefix: error: {Path.cwd()}: the run's log folder {log_path.parent} cannot be made here "
+                 f"({exc.strerror}); run posefix in a folder you can write")
     code, errors = run(snakemake_command(args), log_path, dry_run=args.command == "repair" and args.dry_run)
     if code == 0 and args.command == "repair" and not args.dry_run:
         container = Path(args.library).name if args.library and container_format(args.library) else None

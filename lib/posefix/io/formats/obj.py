@@ -19,8 +19,8 @@ def check(path, data):
 
     Binary data (garbage, or another format named .obj), a file of another mesh format, ``v`` lines
     with fewer than three coordinates or ``f`` lines with fewer than three vertices (a truncated file),
-    index 0 (OBJ indices start at 1; trimesh would renumber it) and indices past the last ``v`` line, both
-    reported 1-based as in the file.
+    coordinates that are not numbers, index 0 (OBJ indices start at 1; trimesh would renumber it) and indices past
+    the last ``v`` line or, negative, before the first, reported as in the file.
     """
     if b"\x00" in data[:4096]:
         raise InputError(path, "binary data, not an OBJ text file")
@@ -35,8 +35,20 @@ def check(path, data):
         tokens = line.split()
         if tokens[:1] == [b"v"] and len(tokens) < 4:
             raise InputError(path, f"line {number}: a vertex with {len(tokens) - 1} coordinates (truncated file?)")
+        if tokens[:1] == [b"v"]:
+            _check_coordinates(path, number, tokens[1:4])
         if tokens[:1] == [b"f"]:
             _check_face(path, number, tokens[1:], vertices)
+
+
+def _check_coordinates(path, number, values):
+    """One ``v`` line's x, y, z (bytes): numbers."""
+    for value in values:
+        try:
+            float(value)
+        except ValueError:
+            raise InputError(path, f"line {number}: vertex coordinate {value.decode(errors='replace')!r} is not a "
+                                   "number") from None
 
 
 def _check_face(path, number, corners, vertices):
@@ -53,6 +65,9 @@ def _check_face(path, number, corners, vertices):
                                    "an integer") from None
         if value == 0:
             raise InputError(path, f"line {number}: face vertex index 0 (OBJ indices start at 1)")
+        if value < -vertices:
+            raise InputError(path, f"line {number}: face vertex index {value} is out of range -{vertices}..-1 "
+                                   "(a negative index counts back from the last vertex line before it)")
         if value > vertices:
             raise InputError(path, f"line {number}: face vertex index {value} is out of range 1..{vertices} "
                                    "(OBJ indices start at 1)")

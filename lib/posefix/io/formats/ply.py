@@ -4,6 +4,7 @@ import re
 
 import numpy as np
 
+from posefix.io.errors import InputError
 from posefix.io.formats.text import check_vertex_rows, rows
 
 LOAD_KWARGS = {}
@@ -22,10 +23,13 @@ def declared_counts(data):
 
 
 def check(path, data):
-    """An ascii header whose vertex count is not the body's (:func:`~posefix.io.formats.text.check_vertex_rows`;
+    """A header without its end (trimesh: "list index out of range"), or an ascii header whose vertex count is not
+    the body's (:func:`~posefix.io.formats.text.check_vertex_rows`;
     trimesh reported "unmatched data"), where the vertex element comes first and its rows can be told from face
     rows (scalar properties, not four)."""
     end = data.find(b"end_header")
+    if end < 0 and data[:3] == b"ply":
+        raise InputError(path, "the PLY header has no end_header line (a truncated file?)")
     if end < 0 or encoding(data) != "ascii":
         return
     first = re.search(rb"element\s+(\w+)\s+(\d+)\s*\n((?:\s*property[^\n]*\n)*)", data[:end + 1])
