@@ -62,7 +62,8 @@ def build_parser():
                          help="folder of the pose library (a reference and its poses), or one USD or glTF file of "
                               "its poses; none: the built-in demo")
         sub.add_argument("--config", nargs="+", default=[], metavar="KEY=VALUE",
-                         help="config overrides, as snakemake --config (e.g. reference=a.obj poses=b,c)")
+                         help="config overrides, as snakemake --config (e.g. reference=a.obj poses=b,c), nested "
+                              "keys with dots (fit.batch=64)")
     repair.add_argument("--cores", type=int, default=2, help="cores to use (default 2)")
     repair.add_argument("--profile", default=None,
                         help="workflow profile: a name under the workflow's profiles/ (slurm) or a folder")
