@@ -100,7 +100,8 @@ FAILED = "posefix: failed in validate: {lib}/"
 """How the recap at the end of a run names a pose file that failed (the file cases)."""
 
 FILES = [
-    BadInput("file", "an OBJ face with two corners", FAILED + "two.obj: line 4: a face with 2 vertices (truncated file?)",
+    BadInput("file", "an OBJ face with two corners",
+             FAILED + "two.obj: line 4: a face with 2 vertices (truncated file?)",
              make=_text("two.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2\n")),
     BadInput("file", "an OBJ face index before the first vertex",
              FAILED + "negative.obj: line 4: face vertex index -9 is out of range -3..-1 (a negative index counts back "
@@ -122,7 +123,8 @@ FILES = [
     BadInput("file", "a gzip file cut short",
              FAILED + "cut.obj.gz: not a valid gzip file: Compressed file ended before the end-of-stream marker was "
              "reached",
-             make=lambda lib: (lib / "cut.obj.gz").write_bytes(gzip.compress((lib / "demo-01.obj").read_bytes())[:3000])),
+             make=lambda lib: (lib / "cut.obj.gz").write_bytes(
+                 gzip.compress((lib / "demo-01.obj").read_bytes())[:3000])),
     BadInput("file", "an OFF file without its counts line",
              FAILED + "nocounts.off: the header declares 0 vertices but the file has 2 vertex rows",
              make=_text("nocounts.off", "OFF\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n")),
@@ -150,7 +152,8 @@ FILES = [
 ]
 
 LIBRARY = [
-    BadInput("library", "an empty folder", "posefix: error: {run}/empty: no mesh files (.obj, .ply, .off, optionally .gz)",
+    BadInput("library", "an empty folder",
+             "posefix: error: {run}/empty: no mesh files (.obj, .ply, .off, optionally .gz)",
              args=("repair", "{run}/empty"), make=lambda lib: (lib.parent / "empty").mkdir()),
     BadInput("library", "poses only in a subfolder",
              "posefix: error: {run}/nested: no mesh files (.obj, .ply, .off, optionally .gz)",
@@ -167,15 +170,18 @@ LIBRARY = [
              "posefix: error: {lib}: several reference candidates (reference.obj, second-reference.obj); set "
              "'reference' in the config", args=("repair", "{lib}"),
              make=_pose_file("second-reference.obj", lambda V, F: (V, F))),
-    BadInput("library", "two poses of one name", "posefix: error: {lib}/demo-01.ply: same pose name 'demo-01' as demo-01.obj",
+    BadInput("library", "two poses of one name",
+             "posefix: error: {lib}/demo-01.ply: same pose name 'demo-01' as demo-01.obj",
              args=("repair", "{lib}"), make=_pose_file("demo-01.ply", lambda V, F: (V, F))),
-    BadInput("library", "a USD file with no mesh", "posefix: error: {run}/empty.usda: no mesh (UsdGeom.Mesh prim) in the file",
-             args=("repair", "{run}/empty.usda"), make=lambda lib: (lib.parent / "empty.usda").write_text("#usda 1.0\n")),
+    BadInput("library", "a USD file with no mesh",
+             "posefix: error: {run}/empty.usda: no mesh (UsdGeom.Mesh prim) in the file",
+             args=("repair", "{run}/empty.usda"), make=_text("../empty.usda", "#usda 1.0\n")),
     BadInput("library", "a glTF file that is not JSON",
              "posefix: error: {run}/broken.gltf: cannot be read as glTF: Expecting property name enclosed in double "
              "quotes: line 1 column 2 (char 1)",
-             args=("repair", "{run}/broken.gltf"), make=lambda lib: (lib.parent / "broken.gltf").write_text("{not json")),
-    BadInput("library", "a reference named that is not in the folder", "posefix: error: {lib}: reference 'nosuch.obj' not found",
+             args=("repair", "{run}/broken.gltf"), make=_text("../broken.gltf", "{not json")),
+    BadInput("library", "a reference named that is not in the folder",
+             "posefix: error: {lib}: reference 'nosuch.obj' not found",
              args=("repair", "{lib}", "--config", "reference=nosuch.obj")),
     BadInput("library", "a pose named that is not in the folder", "posefix: error: {lib}: pose(s) not found: nosuch",
              args=("repair", "{lib}", "--config", "poses=demo-01,nosuch")),
@@ -211,8 +217,10 @@ COMMAND_LINE = [
         ((), "the following arguments are required: command (see posefix --help)"),
         (("repiar", "{lib}"), "argument command: invalid choice: 'repiar' (choose from 'repair', 'report') (see "
                               "posefix --help)"),
-        (("repair", "{lib}", "--cores", "abc"), "argument --cores: invalid int value: 'abc' (see posefix repair --help)"),
-        (("repair", "{lib}", "--cores", "1.5"), "argument --cores: invalid int value: '1.5' (see posefix repair --help)"),
+        (("repair", "{lib}", "--cores", "abc"), "argument --cores: invalid int value: 'abc' (see posefix repair "
+                                                "--help)"),
+        (("repair", "{lib}", "--cores", "1.5"), "argument --cores: invalid int value: '1.5' (see posefix repair "
+                                                "--help)"),
         (("repair", "{lib}", "--memory", "lots"), "argument --memory: invalid float value: 'lots' (see posefix repair "
                                                   "--help)"),
         (("repair", "{lib}", "--frobnicate"), "unrecognized arguments: --frobnicate (see posefix --help)"),
@@ -249,7 +257,8 @@ ENVIRONMENT = [
              env={"SNAKEMAKE_PROFILE": "nosuch"}),
     BadInput("environment", "integrate on a GPU that is absent",
              "posefix integrate: error: --device: gpu requested but no gpu OpenCL device with float64 support (use "
-             "auto to fall back to numpy)", args=("repair", "{lib}", "--config", "integrate.device=gpu", "baselines=[]")),
+             "auto to fall back to numpy)",
+             args=("repair", "{lib}", "--config", "integrate.device=gpu", "baselines=[]")),
 ]
 
 CASES = FILES + LIBRARY + CONFIG + COMMAND_LINE + ENVIRONMENT

@@ -254,9 +254,9 @@ def _solve_and_record(fit, on_iteration):
     kappa = fit.solver.condition()
     cond_s = time.perf_counter() - start
     if not kappa <= MAX_CONDITION:
-        raise FactorizationError(f"the fit's system is nearly singular at {fit.n} centres (condition number {kappa:.2g}, "
-                                 f"beyond {MAX_CONDITION:g}): the constraint points lie near one quadric of "
-                                 "space-time (a sphere scaled uniformly?)")
+        raise FactorizationError(f"the fit's system is nearly singular at {fit.n} centres (condition number "
+                                 f"{kappa:.2g}, beyond {MAX_CONDITION:g}): the constraint points lie near one "
+                                 "quadric of space-time (a sphere scaled uniformly?)")
     err = np.linalg.norm(fit.residual, axis=1)
     pending = fit.pending or {"seconds_select": 0.0, "seconds_update": 0.0, "dropped": 0}
     record = {"iteration": len(fit.history), "centers": fit.n, "max_error": float(err.max()),
