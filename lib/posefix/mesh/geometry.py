@@ -31,12 +31,12 @@ def unit_scale(V):
     Parameters
     ----------
     V : (n, 3) float
-        Vertex positions.
+        The reference's positions (any length unit).
 
     Returns
     -------
     float
-        ``2^-k`` with ``k`` the nearest integer to ``log2`` of the diagonal (1 for a diagonal of 0 or not finite).
+        ``2^-k``, ``k`` the integer nearest to ``log2`` of the diagonal (1 where it is 0 or not finite).
 
     Examples
     --------
