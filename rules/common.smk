@@ -33,9 +33,6 @@ if _problems:  # one line per problem, naming the key; no schema dump
 validate(config, "../schemas/config.schema.yaml")  # fills in the schema's defaults
 
 if workflow.is_main_process:  # not in the jobs a cluster executor starts: they cannot see the main process
-    _unwritable = folder_problems(config)
-    if _unwritable:  # before anything runs (Snakemake itself would stop where the first file is written there)
-        sys.exit("\n".join(f"posefix: error: config: {p}" for p in _unwritable))
     _stale = clear_stale_locks(".")
     if _stale:
         print(f"posefix: removed {len(_stale)} stale Snakemake lock(s) of an interrupted run in {Path.cwd()} "
@@ -126,6 +123,9 @@ if _unknown:
     sys.exit(f"posefix: error: classify.exclude names pose(s) not in the library: {', '.join(_unknown)}")
 RESULTS = f"{config['results']}/{LIBRARY.name}"
 REPORTS = f"{config['reports']}/{LIBRARY.name}"
+_unwritable = folder_problems(config, LIBRARY.name) if workflow.is_main_process else ()
+if _unwritable:  # before anything runs (Snakemake itself would stop where the first file is written there)
+    sys.exit("\n".join(f"posefix: error: config: {p}" for p in _unwritable))
 IS_DEMO = config["library"] is None
 BASELINES = config["baselines"]  # repairs beside S0, compared in the report
 BASELINE_CHOICES = ("medial", "volumetric", "contact")  # stage repair_<name> writes results/<library>/<pose>/<name>.h5

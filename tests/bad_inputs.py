@@ -47,8 +47,11 @@ class BadInput:
 
 
 def _text(name, text):
-    """A ``make`` writing ``text`` into the file ``name`` of the library."""
-    return lambda lib: (lib / name).write_text(text)
+    """A ``make`` writing ``text`` into the file ``name`` of the library (its folders made)."""
+    def make(lib):
+        (lib / name).parent.mkdir(parents=True, exist_ok=True)
+        (lib / name).write_text(text)
+    return make
 
 
 def _gz(name, data):
@@ -239,11 +242,24 @@ COMMAND_LINE = [
 
 ENVIRONMENT = [
     BadInput("environment", "results= a file",
-             "posefix: error: config: results=lib/demo-01.obj: lib/demo-01.obj cannot be made: {lib}/demo-01.obj is "
-             "a file", args=("repair", "{lib}", "--config", "results=lib/demo-01.obj")),
+             "posefix: error: config: results=lib/demo-01.obj: lib/demo-01.obj/lib cannot be made: {lib}/demo-01.obj "
+             "is a file", args=("repair", "{lib}", "--config", "results=lib/demo-01.obj")),
     BadInput("environment", "reports= where no folder can be made",
-             "posefix: error: config: reports=/proc/posefix: /proc/posefix cannot be made: /proc takes no new folder "
-             "(No such file or directory)", args=("repair", "{lib}", "--config", "reports=/proc/posefix")),
+             "posefix: error: config: reports=/proc/posefix: /proc/posefix/lib cannot be made: /proc takes no new "
+             "folder (No such file or directory)", args=("repair", "{lib}", "--config", "reports=/proc/posefix")),
+    BadInput("environment", "the library's results folder a file",
+             "posefix: error: config: results=results: results/lib cannot be made: {run}/results/lib is a file",
+             args=("repair", "{lib}"), make=_text("../results/lib", "")),
+    BadInput("environment", "the library's reports folder a file",
+             "posefix: error: config: reports=reports: reports/lib cannot be made: {run}/reports/lib is a file",
+             args=("repair", "{lib}"), make=_text("../reports/lib", "")),
+    BadInput("environment", ".snakemake a file in the folder run in",
+             "posefix: error: FileExistsError: [Errno 17] File exists: '.snakemake' (Snakemake stopped before any "
+             "stage; see its full output below)", args=("repair", "{lib}"), make=_text("../.snakemake", "")),
+    BadInput("environment", "XDG_CACHE_HOME where no folder can be made",
+             "posefix: error: FileNotFoundError: [Errno 2] No such file or directory: '/proc/posefix-cache' (Snakemake "
+             "stopped before any stage; see its full output below)", args=("repair", "{lib}"),
+             env={"XDG_CACHE_HOME": "/proc/posefix-cache"}),
     BadInput("environment", "a folder to run in that takes no new folder",
              "posefix: error: /proc: the run's log folder posefix-logs cannot be made here (No such file or "
              "directory); run posefix in a folder you can write", args=("repair", "{lib}"), env={"CWD": "/proc"}),

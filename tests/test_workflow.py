@@ -198,10 +198,10 @@ def test_results_and_reports_that_cannot_be_written_are_refused_before_any_job_i
     proc = snakemake(tmp_path, "--config", "results=/proc/posefix", "reports=a-file/reports")
     errors = [line for line in proc.stderr.splitlines() if "error" in line.lower()]
     assert proc.returncode == 1 and errors == [
-        "posefix: error: config: results=/proc/posefix: /proc/posefix cannot be made: /proc takes no new folder (No "
-        "such file or directory)",
-        f"posefix: error: config: reports=a-file/reports: a-file/reports cannot be made: {tmp_path / 'a-file'} is a "
-        "file"], proc.stderr
+        "posefix: error: config: results=/proc/posefix: /proc/posefix/demo cannot be made: /proc takes no new folder "
+        "(No such file or directory)",
+        f"posefix: error: config: reports=a-file/reports: a-file/reports/demo cannot be made: {tmp_path / 'a-file'} "
+        "is a file"], proc.stderr
     assert not (tmp_path / "data").exists()  # no job ran (the demo library not written)
 
 

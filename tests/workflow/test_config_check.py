@@ -58,6 +58,7 @@ def test_a_folder_that_cannot_be_made_is_one_line_naming_why(tmp_path):
     assert folder_problem(tmp_path / "new" / "deeper") is None and not (tmp_path / "new").exists()
     assert folder_problem(tmp_path / "a-file" / "reports") == f"{tmp_path / 'a-file' / 'reports'} cannot be made: " \
                                                               f"{tmp_path / 'a-file'} is a file"
-    assert folder_problems({"results": "/proc/posefix", "reports": str(tmp_path)}) == [
-        "results=/proc/posefix: /proc/posefix cannot be made: /proc takes no new folder (No such file or directory)"]
+    assert folder_problems({"results": "/proc/posefix", "reports": str(tmp_path)}, "lib") == [
+        "results=/proc/posefix: /proc/posefix/lib cannot be made: /proc takes no new folder (No such file or "
+        "directory)"]
     assert list(tmp_path.iterdir()) == [tmp_path / "a-file"]  # the folders made to try are gone

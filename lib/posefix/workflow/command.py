@@ -237,7 +237,31 @@ def failure_line(log_text, folder):
                 if cause.endswith(":"):  # "WorkflowError:", the explanation on the next line that says something
                     cause = " ".join([cause, *[text.strip() for text in lines[k + 1:] if text.strip()][:1]])
                 return "posefix: error: " + message.format(folder=folder, cause=cause[:300])
+    raised = _last_exception(lines)
+    if raised:
+        return f"posefix: error: {raised[:300]} (Snakemake stopped before any stage; see its full output below)"
     return "posefix: error: the run failed before any stage reported (see Snakemake's full output below)"
+
+
+def _last_exception(lines):
+    """The last exception a traceback in ``lines`` (list of str) names, as ``Name: message`` (Snakemake writes
+    ``Name in file F, line N:`` with the message on the next line), or None.
+
+    Examples
+    --------
+    >>> _last_exception(["Traceback ...", '  File "x.py"', "NotADirectoryError: [Errno 20] Not a directory: 'r/a'"])
+    "NotADirectoryError: [Errno 20] Not a directory: 'r/a'"
+    >>> _last_exception(['FileExistsError in file "Snakefile", line 37:', "[Errno 17] File exists: '.snakemake'"])
+    "FileExistsError: [Errno 17] File exists: '.snakemake'"
+    """
+    for k in range(len(lines) - 1, -1, -1):
+        match = re.match(r"(?P<name>[A-Z]\w*(Error|Exception))(?P<rest>: .*| in file .*:)?$", lines[k].strip())
+        if match and (match.group("rest") or "").startswith(" in file"):
+            following = [text.strip() for text in lines[k + 1:] if text.strip()][:1]
+            return ": ".join([match.group("name"), *following])
+        if match:
+            return match.group("name") + (match.group("rest") or "")
+    return None
 
 
 def failed_job_errors(log_text, folder):

@@ -53,9 +53,11 @@ def folder_problem(path):
     return None
 
 
-def folder_problems(config, keys=("results", "reports")):
-    """One line per folder of ``config`` (dict; its ``keys``) that cannot be written (:func:`folder_problem`)."""
-    return [f"{key}={config[key]}: {problem}" for key in keys if (problem := folder_problem(config[key]))]
+def folder_problems(config, name, keys=("results", "reports")):
+    """One line per folder of the library ``name`` under ``config``'s ``keys`` (``results/<name>``,
+    ``reports/<name>``) that cannot be written (:func:`folder_problem`)."""
+    return [f"{key}={config[key]}: {problem}" for key in keys
+            if (problem := folder_problem(f"{config[key]}/{name}"))]
 
 
 def typed_by_schema(value, schema):
