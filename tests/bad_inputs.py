@@ -247,12 +247,9 @@ ENVIRONMENT = [
     BadInput("environment", "reports= where no folder can be made",
              "posefix: error: config: reports=/proc/posefix: /proc/posefix/lib cannot be made: /proc takes no new "
              "folder (No such file or directory)", args=("repair", "{lib}", "--config", "reports=/proc/posefix")),
-    BadInput("environment", "the library's results folder a file",
-             "posefix: error: config: results=results: results/lib cannot be made: {run}/results/lib is a file",
-             args=("repair", "{lib}"), make=_text("../results/lib", "")),
-    BadInput("environment", "the library's reports folder a file",
-             "posefix: error: config: reports=reports: reports/lib cannot be made: {run}/reports/lib is a file",
-             args=("repair", "{lib}"), make=_text("../reports/lib", "")),
+    *[BadInput("environment", f"the library's {key} folder a file",
+               f"posefix: error: config: {key}={key}: {key}/lib cannot be made: {{run}}/{key}/lib is a file",
+               args=("repair", "{lib}"), make=_text(f"../{key}/lib", "")) for key in ("results", "reports")],
     BadInput("environment", ".snakemake a file in the folder run in",
              "posefix: error: FileExistsError: [Errno 17] File exists: '.snakemake' (Snakemake stopped before any "
              "stage; see its full output below)", args=("repair", "{lib}"), make=_text("../.snakemake", "")),
@@ -265,8 +262,7 @@ ENVIRONMENT = [
              "directory); run posefix in a folder you can write", args=("repair", "{lib}"), env={"CWD": "/proc"}),
     BadInput("environment", "posefix-logs a file in the folder run in",
              "posefix: error: {run}: the run's log folder posefix-logs cannot be made here (File exists); run posefix "
-             "in a folder you can write", args=("repair", "{lib}"),
-             make=lambda lib: (lib.parent / "posefix-logs").write_text("")),
+             "in a folder you can write", args=("repair", "{lib}"), make=_text("../posefix-logs", "")),
     BadInput("environment", "SNAKEMAKE_PROFILE names no profile",
              "posefix: error: Snakemake: profile directory given (nosuch), but no profile.yaml (or config.yaml) found "
              "(a --profile or SNAKEMAKE_PROFILE that names no profile)", args=("repair", "{lib}"),
