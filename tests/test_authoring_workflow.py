@@ -12,6 +12,12 @@ from conftest import snakemake
 pytestmark = pytest.mark.pipeline
 
 
+def repair_options(name):
+    """The target and config of the repair of authored library ``name``: S0 alone (the session's demo run checks
+    the baseline repairs) up to the summary, with one downstream step (no figures, no viewer)."""
+    return f"reports/{name}/summary.json", "--config", "baselines=[]", "downstream={'max_iters': 1}"
+
+
 def test_author_a_library_from_the_demo_rig_and_repair_it(tmp_path):
     """`snakemake skeletal_pose` (S1: the demo rig -> <pose>-ssd/-variational/-flow), then the S0 repair of one of them.
     Called by its name before 2026-12 (`author`), which still works for a release and says the new one."""
@@ -24,7 +30,7 @@ def test_author_a_library_from_the_demo_rig_and_repair_it(tmp_path):
     with h5py.File(tmp_path / "results" / "authored" / "demo-limb" / "skeletal_pose.h5", "r") as fh:
         intersecting = fh["intersecting"][()]
     assert intersecting.shape == (4, 3) and intersecting[1, 2] < intersecting[1, 1]  # demo-02: flow < variational
-    proc = snakemake(tmp_path, "--config", f"library={library}", "poses=demo-02-flow", "baselines=[]")
+    proc = snakemake(tmp_path, *repair_options("demo-limb"), f"library={library}", "poses=demo-02-flow")
     assert proc.returncode == 0, proc.stderr[-3000:]
     entry = json.loads((tmp_path / "reports" / "demo-limb" / "summary.json").read_text())["poses"][0]
     assert entry["pose"] == "demo-02-flow" and entry["intersecting_faces"]["repaired_new"] == 0
@@ -40,7 +46,7 @@ def test_author_a_library_from_the_demo_pose_script_and_repair_it(tmp_path):
     library = tmp_path / "data" / "authored" / "demo-limb-volumetric"
     names = sorted(p.name for p in library.iterdir() if not p.name.startswith("."))
     assert names == ["demo-limb-volumetric-reference.obj", "vol-bend.obj", "vol-fold.obj", "vol-twist.obj"]
-    proc = snakemake(tmp_path, "--config", f"library={library}", "poses=vol-bend", "baselines=[]")
+    proc = snakemake(tmp_path, *repair_options("demo-limb-volumetric"), f"library={library}", "poses=vol-bend")
     assert proc.returncode == 0, proc.stderr[-3000:]
     entry = json.loads((tmp_path / "reports" / "demo-limb-volumetric" / "summary.json").read_text())["poses"][0]
     assert entry["pose"] == "vol-bend" and entry["intersecting_faces"]["target"] > 0
@@ -63,8 +69,7 @@ def test_animate_a_library_from_the_demo_markers_and_repair_it(tmp_path):
     with h5py.File(tmp_path / "results" / "authored" / "demo-limb-markers" / "volumetric_animate.h5", "r") as fh:
         # the surface passes within 5 % d of every marker on 400 tet vertices (0.9 % at the default 2500)
         assert fh["residuals"].shape == (13, 8) and fh["metrics"].attrs["residual_max_rel"] < 0.05
-    proc = snakemake(tmp_path, "--config", f"library={library}", "poses=demo-limb-markers-0012",
-                     "baselines=[]")
+    proc = snakemake(tmp_path, *repair_options("demo-limb-markers"), f"library={library}", "poses=demo-limb-markers-0012")
     assert proc.returncode == 0, proc.stderr[-3000:]
     entry = json.loads((tmp_path / "reports" / "demo-limb-markers" / "summary.json").read_text())["poses"][0]
     assert entry["pose"] == "demo-limb-markers-0012" and entry["intersecting_faces"]["repaired_new"] == 0

@@ -1,5 +1,5 @@
-"""The workflow on pose libraries in one USD or glTF file (issue 31): the demo limb (at 20 vertices per ring instead
-of 40, 802 vertices: a quicker repair) stored as USD frames, USD blend shapes and glTF morph targets repairs exactly
+"""The workflow on pose libraries in one USD or glTF file (issue 31): the demo limb (at 12 vertices per ring instead
+of 40, 362 vertices: a quicker repair) stored as USD frames, USD blend shapes and glTF morph targets repairs exactly
 as the same coordinates in OBJ files, and each repair goes back into a file of the input's kind. (The lion library
 as one USD and one GLB file against its folder: `make bench`, benchmarks/containers.py.)"""
 
@@ -18,8 +18,8 @@ from posefix.report.tables import entry_status
 pytestmark = pytest.mark.pipeline
 
 POSES = ("demo-02", "demo-03")
-"""The demo poses these runs repair (two, to keep the four runs short; 44 and 97 faces intersecting at 802 vertices),
-with the contact repair beside S0."""
+"""The demo poses these runs repair (two, to keep the four runs short; 29 and 64 pairs of faces intersecting at 362
+vertices), with the contact repair beside S0."""
 RUN = ("baselines=[contact]", "downstream={'max_iters': 1}")
 """Their config: one downstream step (the repaired meshes do not depend on the check)."""
 
@@ -43,7 +43,7 @@ def on_grid(X):
 @pytest.fixture(scope="module")
 def limb(tmp_path_factory):
     """The demo limb on the grid: the OBJ folder's run and the three containers' runs, {kind: (work, file)}."""
-    V_ref, F, poses = demo_library(around=20)
+    V_ref, F, poses = demo_library(around=12)
     V_ref, chosen = on_grid(V_ref), [on_grid(poses[p]) for p in POSES]
     work = tmp_path_factory.mktemp("containers")
     folder = work / "limb"

@@ -1,4 +1,4 @@
-"""The workflow on two poses of the lion library (../shared/data/lion-poses; the session's lion run, conftest):
+"""The workflow on one pose of the lion library (../shared/data/lion-poses; the session's lion run, conftest):
 the intersection counts of its key frames, its disk use, and its repaired files (every pose and every repair: make
 bench)."""
 

@@ -33,6 +33,11 @@ GRID = {"alphas": [0.5, 1.0], "k_bend": [1e-3, 1e-2, 1e-1]}
 fragile (a run that converges at one k_b can collapse a triangle at the next): ``make bench``'s choice, config
 ``downstream`` as an option; the default is its one setting alpha 1, k_b 1e-2 (a sixth of the time)."""
 
+SPAWN_MIN_VERTICES = 1000
+"""Meshes with fewer vertices run their grid in the calling process whatever ``workers`` asks: starting a worker
+(a Python process importing numpy and scipy, about 1 s on 2 cores) costs more than their runs (a 162-vertex
+sphere's two runs take 0.2 s)."""
+
 
 def handle_vertices(V, count=3):
     """``count`` far-apart vertices of ``V`` (n, 3) float by farthest-point sampling, (count,) int64.
@@ -125,7 +130,8 @@ def downstream_check(V_ref, F, examples, alphas=(1.0,), k_bend=(1e-2,), k_stretc
         Runs at a time, each in a process of its own with one BLAS thread: the same runs as one after
         the other (iterations, stop reasons; bit for bit on the demo, but runs that end in a collapsed
         triangle can differ in the last bits, reports/bench/downstream.md). The processes are spawned: a calling script needs the
-        ``if __name__ == "__main__":`` guard. On Linux they die with the calling process, however it dies.
+        ``if __name__ == "__main__":`` guard. On Linux they die with the calling process, however it dies. A mesh
+        under :data:`SPAWN_MIN_VERTICES` vertices runs in the calling process.
 
     Returns
     -------
@@ -137,6 +143,7 @@ def downstream_check(V_ref, F, examples, alphas=(1.0,), k_bend=(1e-2,), k_stretc
     jobs = [(V_ref, F, examples[names[example]], alpha, kb, k_stretch, settings, hinges)
             for alpha, kb, example in grid]
     runs = []
+    workers = workers if len(V_ref) >= SPAWN_MIN_VERTICES else 1
     for i, ((alpha, kb, example), res) in enumerate(zip(grid, _starmap(deform_towards, jobs, workers)), 1):
         log.info("[%d/%d] alpha %g k_b %g %-8s: %3d iterations, %s, E %.3g (%.1f s)", i, len(grid), alpha, kb,
                  names[example], res.iterations, res.reason, res.errors[-1], res.seconds)
