@@ -15,6 +15,11 @@ from posefix.io.meshes import write_mesh
 pytestmark = pytest.mark.pipeline
 
 
+SUMMARY = "reports/lib/summary.json"
+"""The target of the runs on library ``lib`` that need no figures and no viewer: its summary (and what it reads, the
+repaired meshes among them)."""
+
+
 def test_demo_run_produces_every_artifact(demo_run):
     results = demo_run / "results" / "demo"
     assert (results / "reference.h5").exists()
@@ -398,11 +403,11 @@ def test_a_pose_that_fails_now_is_not_taken_as_finished_from_an_earlier_runs_fil
     write_mesh(library / "ball-reference.obj", V, F)
     write_mesh(library / "ball-01.obj", V * [1.2, 1.0, 0.9], F)
     write_mesh(library / "ball-02.obj", V * [0.9, 1.1, 1.0], F)
-    assert snakemake(tmp_path, "--config", f"library={library}", "baselines=[]").returncode == 0
+    assert snakemake(tmp_path, SUMMARY, "--config", f"library={library}", "baselines=[]").returncode == 0
     nan = V * [0.9, 1.1, 1.0]
     nan[3, 1] = np.nan
     write_mesh(library / "ball-02.obj", nan, F)
-    proc = snakemake(tmp_path, "--config", f"library={library}", "baselines=[]")
+    proc = snakemake(tmp_path, SUMMARY, "--config", f"library={library}", "baselines=[]")
     assert proc.returncode == 1 and (tmp_path / "results" / "lib" / "ball-02" / "verify.h5").exists(), proc.stderr
     summary = json.loads((tmp_path / "reports" / "lib" / "summary.json").read_text())
     assert [e["pose"] for e in summary["poses"]] == ["ball-01"], proc.stderr[-3000:]
@@ -439,7 +444,7 @@ def test_bad_poses_among_good_ones_each_fail_in_one_line_and_the_good_ones_are_r
     write_mesh(library / "ball-01.obj", V * [1.2, 1.0, 0.9], F)
     write_mesh(library / "ball-02.obj", V * [0.9, 1.1, 1.0], F)
     bad = _bad_poses(library, V, F)
-    proc = snakemake(tmp_path, "--config", f"library={library}", "baselines=[]")
+    proc = snakemake(tmp_path, SUMMARY, "--config", f"library={library}", "baselines=[]")
     assert proc.returncode == 1 and "Traceback" not in proc.stderr, proc.stderr[-3000:]
     lines = proc.stderr.splitlines()
     for name, says in bad.items():
@@ -466,7 +471,7 @@ def test_poses_whose_names_a_shell_would_split_are_repaired_under_their_own_name
     names = ["walk 2", "it's $HOME;a", 'sauté "hi"']  # a space, quotes, a dollar sign, a semicolon, non-ASCII
     for i, name in enumerate(names):
         write_mesh(library / f"{name}.obj", V * [1.0 + 0.05 * i, 1.0, 0.95], F)
-    proc = snakemake(tmp_path, "--config", f"library={library}", "baselines=[]")
+    proc = snakemake(tmp_path, SUMMARY, "--config", f"library={library}", "baselines=[]")
     assert proc.returncode == 0 and "Traceback" not in proc.stderr, proc.stderr[-3000:]
     summary = json.loads((tmp_path / "reports" / "lib" / "summary.json").read_text())
     assert sorted(e["pose"] for e in summary["poses"]) == sorted(names)
