@@ -27,6 +27,8 @@ from posefix.io.meshes import write_mesh
 from posefix.workflow.memory import stage_memory_mb
 from posefix.workflow.timings import benchmark_row
 
+from notes import with_notes  # benchmarks/notes.py beside: the hand-written prose of benchmarks/notes.md
+
 ROOT = Path(__file__).resolve().parents[1]
 DATA = Path(os.environ.get("POSEFIX_DATA", ROOT.parent / "shared" / "data"))
 KIDS = ("0001.null.0.off.gz", "0001.isometry.1.off.gz")
@@ -139,7 +141,7 @@ def main():
     cases.sort(key=lambda c: c["vertices"])
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    (out / "memory.md").write_text("\n".join(markdown(cases, args.cores)))
+    (out / "memory.md").write_text(with_notes("\n".join(markdown(cases, args.cores)), "memory.md"))
     (out / "memory.json").write_text(json.dumps(cases, indent=1))
     print(f"wrote {out / 'memory.md'}")
 

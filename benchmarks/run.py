@@ -15,8 +15,8 @@ which also runs alone), the downstream check's old vs new solver on lion-01 and 
 which also runs alone), and USD and glTF libraries against folders of mesh files (benchmarks/containers.py, which
 also runs alone). Everything is collected into
 ``BENCHMARKS.md`` and ``BENCHMARKS.json`` (plus ``blocked_vs_full.png``) next to the per-library
-pieces (``summary-<library>.md``: the library's per-pose summary); the same command on the same
-data gives the same tables, times aside.
+pieces (``summary-<library>.md``: the library's per-pose summary), with the hand-written prose of
+``benchmarks/notes.md`` in place; the same command on the same data gives the same tables, times aside.
 """
 
 import argparse
@@ -34,6 +34,7 @@ from matplotlib.figure import Figure
 from threadpoolctl import threadpool_info
 
 from posefix.report.tables import downstream_grid_markdown, downstream_markdown
+from notes import with_notes  # benchmarks/notes.py beside: the hand-written prose of benchmarks/notes.md
 from repairs import CHECK_BASELINES, KEEP_INTERMEDIATES  # benchmarks/repairs.py beside: the same pipeline call
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -176,7 +177,7 @@ def downstream_section(benchmarks):
 
 
 def report(info, benchmarks, note, out):
-    """BENCHMARKS.md text."""
+    """BENCHMARKS.md text, with its notes (benchmarks/notes.md)."""
     lines = ["# posefix benchmarks", "", "Command: `make bench` (benchmarks/run.py). " + note, "",
              "## Machine", "", *[f"- {k}: {v}" for k, v in info.items()], "",
              "## Repair (S0 pipeline end to end)", "", *repair_table(benchmarks), "",
@@ -211,7 +212,7 @@ def report(info, benchmarks, note, out):
     lines += (out / "scale.md").read_text().splitlines() + [""]
     lines += (out / "downstream.md").read_text().splitlines() + [""]
     lines += (out / "containers.md").read_text().splitlines() + [""]
-    return "\n".join(lines)
+    return with_notes("\n".join(lines), "BENCHMARKS.md")
 
 
 def main():
