@@ -20,7 +20,7 @@ from posefix.io.containers import container_format, container_stem, member_diges
 from posefix.io.library import Library, container_library, discover_library, read_reference
 from posefix.workflow.locks import clear_stale_locks
 from posefix.workflow.memory import memory_problem, stage_memory_mb
-from posefix.workflow.resources import available_memory
+from posefix.workflow.resources import available_memory, device_problems
 from posefix.io.meshes import mesh_file
 from posefix.report.contents import POSE_FIGURES, TIMED_STAGES, VIEWER_FILES
 
@@ -62,6 +62,9 @@ onstart:
     for _old in sorted(RENAMED_RULES.keys() & set(workflow.dag_settings.targets)):
         print(f"posefix: rule '{_old}' is now '{RENAMED_RULES[_old]}' (the old name goes in the next release)",
               file=sys.stderr)
+    _absent = device_problems(config) if workflow.local_exec else ()  # known only now: local, or on a cluster
+    if _absent:  # before any job: the stage would fail each pose's integrate in turn
+        sys.exit("\n".join(f"posefix: error: config: {p}" for p in _absent))
 
 
 CODE = CodeFingerprints(Path(workflow.basedir) / "lib", cache=Path(".snakemake") / "posefix-code.json")

@@ -268,8 +268,8 @@ ENVIRONMENT = [
              "(a --profile or SNAKEMAKE_PROFILE that names no profile)", args=("repair", "{lib}"),
              env={"SNAKEMAKE_PROFILE": "nosuch"}),
     BadInput("environment", "integrate on a GPU that is absent",
-             "posefix integrate: error: --device: gpu requested but no gpu OpenCL device with float64 support (use "
-             "auto to fall back to numpy)",
+             "posefix: error: config: integrate.device: gpu requested but no gpu OpenCL device with float64 support "
+             "(auto falls back to numpy)",
              args=("repair", "{lib}", "--config", "integrate.device=gpu", "baselines=[]")),
 ]
 

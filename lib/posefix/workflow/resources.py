@@ -1,6 +1,7 @@
 """What the machine gives a stage: an OpenCL device, and memory for caches.
 
-Both are chosen once, at the start of a stage, and logged.
+Both are chosen once, at the start of a stage, and logged; a device asked for by name is checked before a local run
+starts (:func:`device_problems`).
 """
 
 import logging
@@ -46,6 +47,27 @@ def opencl_device(kind, threads):
         log.warning("WARNING: %s; using the numpy backend instead (slower)", text)
         return None, "numpy (CPU)"
     return device, text
+
+
+def device_problems(config):
+    """The OpenCL devices config asks for by name (``fit.device``, ``integrate.device``: cpu or gpu) that this
+    machine does not have: one line per setting, naming it (list of str; empty when all are there). For a run whose
+    jobs run here; a cluster's nodes may have what the submitting machine lacks.
+
+    Examples
+    --------
+    >>> device_problems({"fit": {"device": "auto"}, "integrate": {"device": "numpy"}})
+    []
+    """
+    problems = []
+    for section in ("fit", "integrate"):
+        kind = config.get(section, {}).get("device", "auto")
+        if kind in ("cpu", "gpu"):
+            from posefix.spacetime.integration_opencl import select_device
+            device, text = select_device(kind)
+            if device is None:
+                problems.append(f"{section}.device: {kind} requested but {text} (auto falls back to numpy)")
+    return problems
 
 
 def available_memory():
