@@ -18,7 +18,7 @@ import posefix.workflow.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; r
 import numpy as np
 
 from posefix.spacetime import fit_checkpoint as checkpoint
-from posefix.io.artifacts import config_hash, read_artifact, write_artifact
+from posefix.io.artifacts import config_hash, read_artifact, source_file, write_artifact
 from posefix.workflow.cli import library_defaults, run_stage, stage_parser
 from posefix.io.errors import InputError
 from posefix.io.files import file_sha256
@@ -80,11 +80,13 @@ def build_parser():
 
 @contextmanager
 def _refused_as_input(path):
-    """Within: a :class:`FactorizationError` (constraints that make no well-posed fit) is an InputError on ``path``."""
+    """Within: a :class:`FactorizationError` (constraints that make no well-posed fit) is an InputError on the file
+    the constraints ``path`` were made from (the target pose's, a temporary constraints.h5 being gone by the time
+    its user reads the message)."""
     try:
         yield
     except FactorizationError as exc:
-        raise InputError(path, str(exc)) from None
+        raise InputError(source_file(path), str(exc)) from None
 
 
 def main(args, log):

@@ -361,3 +361,26 @@ def test_integrate_refuses_path_lines_that_are_not_finite_in_one_line(demo_artif
     assert len(lines) == 1 and re.fullmatch(
         rf"posefix integrate: error: {re.escape(str(fit))}: the path lines of \d+ vertices are not finite \(first: "
         r"vertex 0\): the fitted field is degenerate", lines[0]), lines
+
+
+def test_a_fit_refused_as_nearly_singular_names_the_pose_file_its_constraints_came_from(tmp_path):
+    """Constraints near one quadric of space-time (a sphere scaled uniformly, spacetime/test_fit.py): the fit stops
+    in one line naming the target pose's mesh file, found back through the artifacts' inputs (constraints.h5 ->
+    keyframes.h5 -> the pose), not the temporary constraints.h5."""
+    from posefix.io.artifacts import write_artifact
+    rng = np.random.default_rng(1)
+    x, t = rng.normal(size=(1500, 3)), rng.uniform(0, 1, size=(1500, 1))
+    Y = np.hstack([(x / np.linalg.norm(x, axis=1, keepdims=True)) * (1 + 0.1 * t), t]).astype(np.float32)
+    pose, keyframes, constraints = tmp_path / "ball-02.obj", tmp_path / "keyframes.h5", tmp_path / "constraints.h5"
+    for made in (tmp_path / "ball-reference.obj", pose, tmp_path / "classify.h5"):
+        made.write_text("")  # hashed into the artifacts' inputs; not read
+    write_artifact(keyframes, "keyframes", {}, params={}, inputs=[tmp_path / "ball-reference.obj", pose], timings={})
+    write_artifact(constraints, "constraints", {"points": Y.astype(np.float64), "values": 0.1 * Y[:, :3]},
+                   params={}, inputs=[keyframes, tmp_path / "classify.h5"], timings={},
+                   metrics={"bbox_diagonal": 2.0})
+    proc = run_stage("fit", "--constraints", constraints, "--eps-rel", 1e-10, "--batch", 64,
+                     "--checkpoint", tmp_path / "fit.checkpoint", "--out", tmp_path / "fit.h5", check=False)
+    lines = proc.stderr.strip().splitlines()
+    assert proc.returncode != 0 and not (tmp_path / "fit.h5").exists(), proc.stderr
+    assert lines[-1].startswith(f"posefix fit: error: {pose}: the fit's system is nearly singular at 64 centres "
+                                "(condition number "), lines

@@ -120,6 +120,35 @@ def read_artifact(path, stage, names):
         raise InputError(path, f"cannot be read as HDF5: {str(exc).splitlines()[0]}") from None
 
 
+def source_file(path, depth=8):
+    """The file a stage artifact was made from, to name in a message about it: following each artifact's first input
+    back while all its inputs are artifacts (``.h5``), the last input that is not (fit's constraints.h5 ->
+    keyframes.h5 -> the target pose's mesh file). ``path`` itself where the chain cannot be followed.
+
+    Parameters
+    ----------
+    path : str or Path
+    depth : int
+        Artifacts followed at most.
+
+    Returns
+    -------
+    str or Path
+    """
+    current = path
+    for _ in range(depth):
+        try:
+            with h5py.File(current, "r") as fh:
+                inputs = [str(p) for p in json.loads(fh.attrs.get("inputs", "[]"))]
+        except (OSError, ValueError):
+            return path
+        files = [p for p in inputs if not p.endswith(".h5")]
+        if files or not inputs:
+            return files[-1] if files else path
+        current = inputs[0]
+    return path
+
+
 def read_baseline(path, name, names):
     """:func:`read_artifact` of the artifact of baseline repair ``name`` (written by stage ``repair_<name>``).
 
