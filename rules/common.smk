@@ -14,6 +14,7 @@ from posefix.workflow.command import failed_job_errors, recap_line
 from posefix.workflow.partial_summary import finished_poses, pose_errors, stage_finished, stale_files
 from posefix.workflow.config_check import config_problems, folder_problems, typed_by_schema
 from posefix.io.errors import InputError
+from posefix.workflow.files import package_folder
 from posefix.workflow.fingerprint import CodeFingerprints
 from posefix.io.artifacts import read_artifact
 from posefix.io.containers import container_format, container_stem, member_digests, open_container
@@ -43,7 +44,7 @@ if workflow.is_main_process:  # not in the jobs a cluster executor starts: they 
 put_interpreter_first_on_path()
 
 
-VIEWER_PAGE = [str(Path(workflow.basedir) / "lib" / "posefix" / "report" / f) for f in VIEWER_FILES.values()]
+VIEWER_PAGE = [str(package_folder() / "report" / f) for f in VIEWER_FILES.values()]
 """The files of the 3D viewer page (template, script, vendored three.js), inputs of rule viewer."""
 
 
@@ -67,7 +68,7 @@ onstart:
         sys.exit("\n".join(f"posefix: error: config: {p}" for p in _absent))
 
 
-CODE = CodeFingerprints(Path(workflow.basedir) / "lib", cache=Path(".snakemake") / "posefix-code.json")
+CODE = CodeFingerprints(package_folder().parent, cache=Path(".snakemake") / "posefix-code.json")
 
 
 def intermediate(path):

@@ -1,6 +1,6 @@
 """The ``posefix`` command: run the packaged workflow on a pose library from any folder.
 
-``posefix repair LIBRARY`` runs ``snakemake`` with this checkout's Snakefile in the current folder
+``posefix repair LIBRARY`` runs ``snakemake`` with the packaged workflow's Snakefile in the current folder
 (``results/``, ``reports/`` go there), ``posefix report LIBRARY`` writes the self-contained HTML report
 of a finished run. Snakemake's own output goes to ``posefix-logs/<time>.log``; the terminal shows the
 progress and the posefix lines, and a failed run ends with the posefix error lines of the stages (not
@@ -21,10 +21,12 @@ from pathlib import Path
 
 from posefix.io.containers import CONTAINER_SUFFIXES, container_format, container_stem
 from posefix.report.tables import entry_status
+from posefix import __version__
+from posefix.workflow.files import workflow_folder
 from posefix.workflow.progress import RunProgress
 
-WORKFLOW = Path(__file__).resolve().parents[3]
-"""The checkout the package is installed from (``pip install -e``): Snakefile, rules, stages, profiles."""
+WORKFLOW = workflow_folder()
+"""The workflow's folder: Snakefile, rules, stages, profiles (in the wheel, or the checkout of ``pip install -e``)."""
 
 SHOWN = re.compile(r"^(posefix\b|Nothing to be done|This was a dry-run|[\d:]+ posefix [\w-]+: warning:)")
 """Snakemake's output lines shown as they are (the progress: :class:`~posefix.workflow.progress.RunProgress`)."""
@@ -54,6 +56,7 @@ class _OneLineParser(argparse.ArgumentParser):
 
 def build_parser():
     parser = _OneLineParser(prog="posefix", description=__doc__.split("\n\n")[0].replace("``", ""))
+    parser.add_argument("--version", action="version", version=f"posefix {__version__}")
     commands = parser.add_subparsers(dest="command", required=True)
     repair = commands.add_parser("repair", help="repair a pose library (the whole workflow)")
     report = commands.add_parser("report", help="the HTML report of a repaired library")
@@ -147,7 +150,7 @@ def profile_folder(profile):
 def argument_problem(args):
     """What is wrong with parsed ``args`` before anything runs, one line (str), or None."""
     if not (WORKFLOW / "Snakefile").is_file():
-        return f"no workflow next to the package ({WORKFLOW}): install it with pip install -e"
+        return f"no workflow beside the package ({WORKFLOW}): reinstall posefix (pip install posefix, or pip install -e .)"
     if args.library is not None and not Path(args.library).is_dir():
         if not container_format(args.library):
             return f"{args.library}: not a folder, nor a USD or glTF file ({', '.join(CONTAINER_SUFFIXES)})"
