@@ -26,19 +26,25 @@ def installed(tmp_path_factory):
                            capture_output=True, text=True, cwd=tmp)
     assert built.returncode == 0, built.stderr[-3000:]
     wheel, = (tmp / "dist").glob("posefix-*.whl")
-    subprocess.run([sys.executable, "-m", "venv", tmp / "venv"], check=True)
+    subprocess.run([sys.executable, "-m", "venv", tmp / "venv"], check=True, env=_outside_the_checkout())
     python = tmp / "venv" / "bin" / "python"
     site = subprocess.run([python, "-c", "import sysconfig; print(sysconfig.get_paths()['purelib'])"],
                           capture_output=True, text=True, check=True).stdout.strip()
     (tmp / site / "posefix-dependencies.pth").write_text(sysconfig.get_paths()["purelib"] + "\n")
-    proc = subprocess.run([python, "-m", "pip", "install", "--quiet", "--no-deps", "--no-index", wheel],
-                          capture_output=True, text=True)
+    # --ignore-installed: the checkout's editable posefix, seen through the .pth file, is left alone
+    proc = subprocess.run([python, "-m", "pip", "install", "--quiet", "--no-deps", "--no-index", "--ignore-installed",
+                           wheel], capture_output=True, text=True, env=_outside_the_checkout())
     assert proc.returncode == 0, proc.stderr[-3000:]
     return tmp / "venv" / "bin"
 
 
+def _outside_the_checkout():
+    """This environment without PYTHONPATH: nothing of the checkout on the path."""
+    return {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
+
+
 def _run(bin_folder, args, cwd):
-    env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}  # nothing of the checkout on the path
+    env = _outside_the_checkout()
     env["PATH"] = f"{bin_folder}{os.pathsep}{env['PATH']}"
     return subprocess.run([bin_folder / "posefix", *map(str, args)], capture_output=True, text=True, cwd=cwd,
                           env=env, timeout=900)
@@ -50,7 +56,7 @@ def test_the_wheel_carries_the_workflow_and_says_its_version(installed, tmp_path
     assert proc.returncode == 0 and proc.stdout.strip() == f"posefix {__version__}", proc.stderr
     where = subprocess.run([installed / "python", "-c", "from posefix.workflow.files import workflow_folder; "
                             "print(workflow_folder())"], capture_output=True, text=True, cwd=tmp_path,
-                           env={k: v for k, v in os.environ.items() if k != "PYTHONPATH"})
+                           env=_outside_the_checkout())
     folder = where.stdout.strip()
     assert folder.endswith(f"site-packages/posefix/{PACKAGED}") and str(ROOT) not in folder, where.stderr
     assert all(os.path.exists(os.path.join(folder, name)) for name in WORKFLOW_FILES)
