@@ -14,6 +14,7 @@ import os
 import signal
 import sys
 from concurrent.futures import ProcessPoolExecutor
+from contextlib import nullcontext
 from dataclasses import dataclass
 
 import numpy as np
@@ -131,7 +132,7 @@ def downstream_check(V_ref, F, examples, alphas=(1.0,), k_bend=(1e-2,), k_stretc
         the other (iterations, stop reasons; bit for bit on the demo, but runs that end in a collapsed
         triangle can differ in the last bits, reports/bench/downstream.md). The processes are spawned: a calling script needs the
         ``if __name__ == "__main__":`` guard. On Linux they die with the calling process, however it dies. A mesh
-        under :data:`SPAWN_MIN_VERTICES` vertices runs in the calling process.
+        under :data:`SPAWN_MIN_VERTICES` vertices runs in the calling process, with one BLAS thread as a worker.
 
     Returns
     -------
@@ -143,11 +144,13 @@ def downstream_check(V_ref, F, examples, alphas=(1.0,), k_bend=(1e-2,), k_stretc
     jobs = [(V_ref, F, examples[names[example]], alpha, kb, k_stretch, settings, hinges)
             for alpha, kb, example in grid]
     runs = []
-    workers = workers if len(V_ref) >= SPAWN_MIN_VERTICES else 1
-    for i, ((alpha, kb, example), res) in enumerate(zip(grid, _starmap(deform_towards, jobs, workers)), 1):
-        log.info("[%d/%d] alpha %g k_b %g %-8s: %3d iterations, %s, E %.3g (%.1f s)", i, len(grid), alpha, kb,
-                 names[example], res.iterations, res.reason, res.errors[-1], res.seconds)
-        runs.append(res)
+    in_process = workers > 1 and len(V_ref) < SPAWN_MIN_VERTICES
+    with threadpool_limits(1) if in_process else nullcontext():  # one BLAS thread, as a worker: the same bits
+        for i, ((alpha, kb, example), res) in enumerate(
+                zip(grid, _starmap(deform_towards, jobs, 1 if in_process else workers)), 1):
+            log.info("[%d/%d] alpha %g k_b %g %-8s: %3d iterations, %s, E %.3g (%.1f s)", i, len(grid), alpha, kb,
+                     names[example], res.iterations, res.reason, res.errors[-1], res.seconds)
+            runs.append(res)
     check = DownstreamCheck(grid, runs, handles, names)
     metrics = check.metrics()
     for example, name in enumerate(names):
