@@ -14,7 +14,8 @@ from posefix.workflow.cli import library_defaults, run_stage, stage_parser
 from posefix.io.errors import InputError
 from posefix.workflow.resources import opencl_device
 from posefix.workflow.timings import Timings
-from posefix.spacetime.integration import field_velocity, rk45
+from posefix.spacetime.integration import rk45
+from posefix.spacetime.integration_opencl import path_lines
 from posefix.spacetime.rbf import RBFField
 
 DOCS = {
@@ -60,13 +61,8 @@ def main(args, log):
     log.info("integrating %d vertices through %d centres on %s (rtol %.1e, atol %.1e d)", len(X0), len(field.weights),
              device_name, args.rtol, args.atol_rel)
     with timings.step("integrate"):
-        if device is not None:
-            from posefix.spacetime.integration_opencl import OpenCLIntegrator
-            X1, samples, steps, rejected = OpenCLIntegrator(device, args.vec or None).integrate(
-                field, tau, X0, times, args.rtol, args.atol_rel * d, args.h0)
-        else:
-            X1, samples, steps, rejected = rk45(field_velocity(field, tau), X0, atol=args.atol_rel * d,
-                                                rtol=args.rtol, h0=args.h0, sample_times=times)
+        X1, samples, steps, rejected = path_lines(field, tau, X0, times, device,
+                                                  (args.rtol, args.atol_rel * d, args.h0), args.vec or None)
     log.info("steps per vertex: mean %.1f, max %d; rejected: %d in all", steps.mean(), steps.max(), rejected.sum())
     lost = ~(np.isfinite(samples).all(axis=(0, 2)) & np.isfinite(X1).all(axis=1))
     if lost.any():  # (either backend)

@@ -16,15 +16,14 @@ from dataclasses import asdict
 
 import posefix.workflow.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; runtime defaults before numpy)
 
-from posefix.mesh.contact_solver import ContactSolver
 from posefix.mesh.geometry import unit_scale
 from posefix.io.artifacts import read_artifact, write_artifact
 from posefix.workflow.cli import run_stage, stage_parser
-from posefix.workflow.contact_options import add_contact_options, contact_settings
+from posefix.workflow.contact_options import add_contact_options
 from posefix.workflow.timings import Timings
 from posefix.verify.contact_finish import FinishSettings
 from posefix.verify.flags import describe_flags
-from posefix.verify.sequence import RepairSettings, finish_pose, repair_pose
+from posefix.verify.sequence import RepairSettings, finish_settings, finished_pose
 from posefix.verify.state import RepairProblem
 from posefix.spacetime.classification import split_frames
 
@@ -98,9 +97,7 @@ def main(args, log):
     unit = unit_scale(kf["reference"])  # the working unit: a library at 1e-30 or 1e+30 repairs as at 1
     problem = RepairProblem.build(unit * kf["reference"], unit * kf["target"], kf["faces"], cl["mask"],
                                   split_frames(cl["pairs"], cl["pair_offsets"]))
-    settings = RepairSettings(args.finish, args.fallback_eps, args.fallback_fit, args.ring, args.max_rings,
-                              args.repair_new, args.reproduce)
-    result, params = _finish(args, problem, (it, kf["frames"], unit), fattrs, settings)
+    result, params = _finish(args, problem, (it, kf["frames"], unit), fattrs)
     timings.update(result.seconds)
     _say_what_was_left(json.loads(kattrs["inputs"])[-1], result.metrics, log)
     write_artifact(
@@ -129,23 +126,18 @@ def _say_what_was_left(target, metrics, log):
         log.warning("%s: %s; see the report's pose page", target, "; ".join(left))
 
 
-def _finish(args, problem, integrated, fit_attrs, settings):
-    """(RepairResult, params) of the finish ``settings.finish`` of the integrated pose, in the working unit;
+def _finish(args, problem, integrated, fit_attrs):
+    """(RepairResult, params) of the finish ``args.finish`` of the integrated pose, in the working unit;
     ``integrated``: (integrate.h5's arrays, the key frames (K, n, 3), the working unit (lengths times it: ``problem``'s
     are))."""
     integrated, frames, unit = integrated
     d = unit * float(fit_attrs["metrics"]["bbox_diagonal"])
-    if settings.finish == "snap":
-        eps = json.loads(fit_attrs["config"])["eps_rel"] * d
-        result = repair_pose(problem, unit * integrated["positions"], d, eps,
-                             float(fit_attrs["metrics"]["max_error_rel"]), settings)
-        return result, asdict(settings)
-    contact, contact_params = contact_settings(args)
-    finish = FinishSettings(args.free_goal, args.constrained_weight, args.untangle_rings, args.elastic_weight,
-                            args.bending, args.rest_limit, args.tracked_iterations)
-    solver = ContactSolver(problem.V_ref, problem.F, problem.frame_pairs[0], contact, args.threads)
-    result = finish_pose(problem, unit * integrated["samples"], d, solver, finish, unit * frames)
-    return result, {"finish": "contact"} | asdict(finish) | contact_params
+    eps = json.loads(fit_attrs["config"])["eps_rel"] * d
+    settings = finish_settings(vars(args))
+    result = finished_pose(problem, (unit * integrated["samples"], unit * frames), d, settings,
+                           (eps, float(fit_attrs["metrics"]["max_error_rel"])), args.threads)
+    repair, finish, contact = map(asdict, settings)
+    return result, repair if args.finish == "snap" else {"finish": "contact"} | finish | contact
 
 
 if __name__ == "__main__":

@@ -1,5 +1,8 @@
 """posefix: repair self-intersections in mesh pose libraries by space-time integration.
 
+The Python API (``docs/api.md``): :func:`repair_library` runs the workflow on a pose library,
+:func:`repair_pose` repairs one pose in memory, and both raise :class:`PosefixError` with a one-line message.
+
 Conventions used throughout the package:
 
 * ``V`` is a float64 array of shape (n, 3): vertex positions in the input's length units.
@@ -38,3 +41,19 @@ def _runtime_defaults():
 
 
 _runtime_defaults()
+
+
+_API = {"repair_pose": "posefix.pose_repair", "repair_library": "posefix.workflow.library_repair",
+        "PosefixError": "posefix.io.errors"}
+"""The API's names and their modules, imported when first used (``import posefix`` loads no numpy: the runtime
+defaults above must come first)."""
+
+
+def __getattr__(name):
+    if name not in _API:
+        raise AttributeError(f"module 'posefix' has no attribute {name!r}")
+    import importlib
+    return getattr(importlib.import_module(_API[name]), name)
+
+
+__all__ = ["__version__", *_API]

@@ -1,7 +1,13 @@
-"""The one exception type for problems with user input."""
+"""posefix's exceptions: :class:`PosefixError`, whose message is one line; :class:`InputError` for a problem with
+user input."""
 
 
-class InputError(Exception):
+class PosefixError(Exception):
+    """What the Python API (``posefix.repair_pose``, ``posefix.repair_library``) raises: its message is the one line
+    that says what failed and where (the file, key or argument), as the ``posefix`` command prints it."""
+
+
+class InputError(PosefixError):
     """A problem with user input, reported as ``<path>: <problem>``.
 
     Stage command lines (:func:`posefix.workflow.cli.run_stage`) print it as one line and exit 2.

@@ -40,31 +40,40 @@ def pose_entry(pose, metrics, downstream, seconds, baselines=None, distortion=No
     dict
         With its ``status`` (:func:`posefix.report.tables.pose_status`), which every page and the terminal read.
     """
-    kf, fi, it, ve = (metrics[s] for s in ("keyframes", "fit", "integrate", "verify"))
-    entry = _finish_entry(ve) | {
+    kf, fi, it = (metrics[s] for s in ("keyframes", "fit", "integrate"))
+    entry = {
         "pose": pose, "vertices": int(kf["vertices"]), "faces": int(kf["faces"]), "keyframes": int(kf["keyframes"]),
-        "intersecting_faces": {
-            "reference": int(ve["intersecting_faces_reference"]), "target": int(ve["intersecting_faces_target"]),
-            "repaired": int(ve["intersecting_faces_repaired"]), "repaired_new": int(ve["repaired_new"]),
-            "repaired_new_in_fallback": int(ve["repaired_new_in_fallback"]),
-            "keyframes_max": int(ve["intersecting_faces_keyframes_max"])},
         "constraint_vertices": int(fi["constraint_vertices"]), "constraints": int(fi["constraints"]),
         "fit": {"centers": int(fi["centers"]), "iterations": int(fi["iterations"]), "stop_reason": str(fi["stop_reason"]),
                 "max_error_rel": float(fi["max_error_rel"]), "rms_error_rel": float(fi["rms_error_rel"]),
                 "max_condition": float(fi["max_condition"]), "seconds": float(fi["seconds"])},
         "integrate": {"backend": str(it["backend"]), "device": str(it["device"]), "seconds": float(it["seconds"]),
                       "steps_mean": float(it["steps_mean"]), "steps_max": int(it["steps_max"])},
-        "deviation": {k: float(ve[f"deviation_{k}"]) for k in DEVIATIONS},
-        "integrated_deviation": {k: float(ve[f"integrated_deviation_{k}"]) for k in DEVIATIONS},
-        "fallback_vertices": int(ve["fallback_vertices"]),
-        "fallback": {"pass_through": int(ve["fallback_pass_through"]),
-                     "new_intersection": int(ve["fallback_new_intersection"]),
-                     "reproduced": int(ve["reproduced_vertices"]), "pushed": int(ve["pushed_vertices"])},
         "downstream": downstream_entry(downstream),
-        **({"distortion": distortion} if distortion else {}),
         **({"baselines": baselines} if baselines else {}),
         "seconds_stages": seconds, "seconds_total": sum(v for v in seconds.values() if v is not None)}
-    return entry | {"status": dict(zip(("kind", "reason"), pose_status(entry)))}
+    return entry | verified_entry(metrics["verify"], entry["faces"], distortion)
+
+
+def verified_entry(verify, faces, distortion=None):
+    """The part of a pose's summary entry that its repair decides, with the pose's ``status``
+    (:func:`posefix.report.tables.pose_status`): intersecting faces, deviations, the finish, the fallback and
+    ``distortion`` (as :func:`pose_entry`'s), from verify's ``metrics`` (dict) of a pose of ``faces`` faces."""
+    entry = _finish_entry(verify) | {
+        "intersecting_faces": {
+            "reference": int(verify["intersecting_faces_reference"]),
+            "target": int(verify["intersecting_faces_target"]),
+            "repaired": int(verify["intersecting_faces_repaired"]), "repaired_new": int(verify["repaired_new"]),
+            "repaired_new_in_fallback": int(verify["repaired_new_in_fallback"]),
+            "keyframes_max": int(verify["intersecting_faces_keyframes_max"])},
+        "deviation": {k: float(verify[f"deviation_{k}"]) for k in DEVIATIONS},
+        "integrated_deviation": {k: float(verify[f"integrated_deviation_{k}"]) for k in DEVIATIONS},
+        "fallback_vertices": int(verify["fallback_vertices"]),
+        "fallback": {"pass_through": int(verify["fallback_pass_through"]),
+                     "new_intersection": int(verify["fallback_new_intersection"]),
+                     "reproduced": int(verify["reproduced_vertices"]), "pushed": int(verify["pushed_vertices"])},
+        **({"distortion": distortion} if distortion else {})}
+    return entry | {"status": dict(zip(("kind", "reason"), pose_status(entry | {"faces": faces})))}
 
 
 def _finish_entry(verify):

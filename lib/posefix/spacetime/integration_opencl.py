@@ -18,7 +18,7 @@ platform has one, else a CPU device.
 
 import numpy as np
 
-from posefix.spacetime.integration import MAX_STEPS
+from posefix.spacetime.integration import MAX_STEPS, field_velocity, rk45
 
 KERNEL = r"""
 #pragma OPENCL EXTENSION cl_khr_fp64 : enable
@@ -282,6 +282,16 @@ class OpenCLIntegrator:
 def rk45_opencl(device, field, tau, X0, sample_times, rtol, atol, h0=0.05):
     """:meth:`OpenCLIntegrator.integrate` on ``device`` with its default vector width (one-off)."""
     return OpenCLIntegrator(device).integrate(field, tau, X0, sample_times, rtol, atol, h0)
+
+
+def path_lines(field, tau, X0, sample_times, device, tolerances, vec=None):
+    """Every point of ``X0`` through ``field`` on ``device`` (:class:`OpenCLIntegrator`), or with the numpy
+    :func:`~posefix.spacetime.integration.rk45` where ``device`` is None; ``tolerances``: ``(rtol, atol, h0)`` as
+    there. Returns ``X1 (n, 3), samples (S, n, 3), steps (n,), rejected (n,)``."""
+    rtol, atol, h0 = tolerances
+    if device is not None:
+        return OpenCLIntegrator(device, vec).integrate(field, tau, X0, sample_times, rtol, atol, h0)
+    return rk45(field_velocity(field, tau), X0, atol=atol, rtol=rtol, h0=h0, sample_times=sample_times)
 
 
 class FieldEvaluator:

@@ -19,10 +19,11 @@ the contact solver moves the integrated pose, and no new intersection can form) 
 
 import logging
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 
 import numpy as np
 
+from posefix.mesh.contact_solver import ContactSettings, ContactSolver
 from posefix.mesh.intersections import intersecting_faces, self_intersecting_pairs
 from posefix.verify.contact_finish import FinishSettings, contact_finish
 from posefix.verify.deviation import deviation
@@ -169,6 +170,44 @@ def finish_pose(problem, samples, d, solver, settings=FinishSettings(), frames=N
                        finish.pairs)
     result.metrics |= {k: v for k, v in finish.metrics.items() if k != "contact_seconds"}
     return result
+
+
+def finish_settings(options):
+    """``(RepairSettings, FinishSettings, ContactSettings)`` from a mapping holding their fields by name: the
+    pipeline's config sections ``verify`` and ``contact`` merged, or a stage's parsed options (``vars(args)``)."""
+    return tuple(kind(**{f.name: options[f.name] for f in fields(kind)})
+                 for kind in (RepairSettings, FinishSettings, ContactSettings))
+
+
+def finished_pose(problem, paths, d, settings, fit_errors, threads=1):
+    """Repair an integrated pose with the finish of ``settings`` and verify it (:func:`finish_pose` or the snap
+    finish's :func:`repair_pose`).
+
+    Parameters
+    ----------
+    problem : posefix.verify.state.RepairProblem
+    paths : tuple
+        The integrated path lines at their sample times (S, n, 3), the integrated pose last, and the key frames
+        (K, n, 3).
+    d : float
+        The reference's bounding-box diagonal (length units).
+    settings : tuple
+        :func:`finish_settings`'s.
+    fit_errors : tuple of float
+        The fit's error threshold (length units) and its max error at its end relative to ``d`` (the snap
+        finish's reach).
+    threads : int
+        The contact solver's threads.
+
+    Returns
+    -------
+    RepairResult
+    """
+    (samples, frames), (repair, finish, contact) = paths, settings
+    if repair.finish == "snap":
+        return repair_pose(problem, samples[-1], d, fit_errors[0], fit_errors[1], repair)
+    solver = ContactSolver(problem.V_ref, problem.F, problem.frame_pairs[0], contact, threads)
+    return finish_pose(problem, samples, d, solver, finish, frames)
 
 
 def _verified(problem, X, replaced, integrated, d, seconds, pairs=None):

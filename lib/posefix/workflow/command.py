@@ -22,6 +22,7 @@ from pathlib import Path
 from posefix.io.containers import CONTAINER_SUFFIXES, container_format, container_stem
 from posefix.report.tables import entry_status
 from posefix import __version__
+from posefix.workflow.config_check import nested
 from posefix.workflow.files import workflow_folder
 from posefix.workflow.progress import RunProgress
 
@@ -102,17 +103,8 @@ def nested_config(entries):
     >>> nested_config(["poses=a,b", "fit.batch=64", "fit.eps_rel=1e-3", "verify.finish=snap"])
     ['poses=a,b', 'fit={"batch": "64", "eps_rel": "1e-3"}', 'verify={"finish": "snap"}']
     """
-    plain, sections = [], {}
-    for entry in entries:
-        key, _, value = entry.partition("=")
-        if "." not in key:
-            plain.append(entry)
-            continue
-        *path, last = key.split(".")
-        section = sections.setdefault(path[0], {})
-        for name in path[1:]:
-            section = section.setdefault(name, {})
-        section[last] = value
+    plain = [entry for entry in entries if "." not in entry.partition("=")[0]]
+    sections = nested(dict(entry.partition("=")[::2] for entry in entries if entry not in plain))
     return plain + [f"{name}={json.dumps(value)}" for name, value in sections.items()]
 
 

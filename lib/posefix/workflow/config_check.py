@@ -32,6 +32,32 @@ def config_problems(config, schema):
     return sorted(set(lines))
 
 
+def nested(config):
+    """``config`` (dict) with its dotted keys as nested sections, merged with the sections it has (:func:`merged`).
+
+    Examples
+    --------
+    >>> nested({"poses": "a", "fit.batch": 64, "fit": {"eps_rel": 1e-3}, "verify.finish": "snap"})
+    {'poses': 'a', 'fit': {'batch': 64, 'eps_rel': 0.001}, 'verify': {'finish': 'snap'}}
+    """
+    out = {}
+    for key, value in config.items():
+        first, *rest = key.split(".")
+        for name in reversed(rest):
+            value = {name: value}
+        out = merged(out, {first: value})
+    return out
+
+
+def merged(base, over):
+    """``base`` (dict) with ``over``'s values over it, a section (dict) in both merged key by key, dict (neither is
+    changed)."""
+    out = dict(base)
+    for key, value in over.items():
+        out[key] = merged(out[key], value) if isinstance(value, dict) and isinstance(out.get(key), dict) else value
+    return out
+
+
 def folder_problem(path):
     """Why no file can be written under the folder ``path`` (str), or None: a folder is made and removed in it, or,
     where it does not exist yet, in its nearest parent that does (the run would make it there).
