@@ -8,7 +8,9 @@ CORES ?= 2
 POSEFIX_ARGS ?=
 PYTEST_ARGS ?=
 
-.PHONY: run test test-fast bench lint system clean
+BLENDER_VENV ?= .venv-blender
+
+.PHONY: run test test-fast bench lint system clean blender-addon
 
 run: $(VENV)/.installed system
 	$(VENV)/bin/posefix repair --cores $(CORES) $(POSEFIX_ARGS)
@@ -16,7 +18,7 @@ run: $(VENV)/.installed system
 # The whole suite on $(CORES) processes, one test file each at a time (a file's fixtures are made once): the end-to-end
 # runs are chains of single-threaded stages, so two processes keep 2 cores busy (three were no faster). The end-to-end
 # files go first, longest first (tests/conftest.py LONGEST_FIRST; --no-loadscope-reorder keeps that order).
-test: $(VENV)/.installed system
+test: $(VENV)/.installed $(BLENDER_VENV)/.installed system
 	$(PY) -m pytest -n $(CORES) --dist loadfile --no-loadscope-reorder $(PYTEST_ARGS)
 
 # The unit tests alone, for your own loop, on $(CORES) processes: no end-to-end pipeline, SLURM or ../shared/data tests.
@@ -39,6 +41,18 @@ $(VENV)/.installed: pyproject.toml | system
 	  || echo "posefix: WARNING: scikit-sparse (CHOLMOD) did not build; the contact solver falls back to SuperLU"
 	touch $@
 
+# bpy 4.5 LTS (Blender as a Python module, from PyPI) runs the Blender add-on's tests headless (tests/blender/). It gets
+# an environment of its own: it pins numpy < 2 (posefix runs on numpy 2; pandas 3 needs it) and needs Python 3.11, as
+# Blender's own Python is apart from posefix's. Without it (another Python) the Blender tests are skipped.
+$(BLENDER_VENV)/.installed:
+	($(PYTHON) -m venv $(BLENDER_VENV) && $(BLENDER_VENV)/bin/python -m pip install --quiet 'bpy==4.5.*' && touch $@) \
+	  || echo "posefix: WARNING: bpy 4.5 could not be installed (it needs Python 3.11); the Blender tests are skipped"
+
+# The Blender extension's zip (dist/posefix-blender-<version>.zip), for Blender's Preferences > Get Extensions >
+# Install from Disk (docs/blender.md).
+blender-addon: $(VENV)/.installed
+	$(PY) -m posefix.workflow.blender_addon dist
+
 # Debian's PoCL gives an OpenCL CPU device (PyPI's PoCL cannot compile kernels on these CPUs); SuiteSparse's headers
 # build CHOLMOD; OpenBLAS (threaded) makes its supernodal factorization 3x faster than the reference BLAS.
 # Chromium (headless, software WebGL) runs the tests of the 3D viewer page (tests/report/test_viewer.py).
@@ -58,4 +72,4 @@ system:
 	  "OpenCL stages fall back to numpy, the contact solver to SuperLU, the viewer's browser tests are skipped"; fi
 
 clean:
-	rm -rf results data/demo .snakemake
+	rm -rf results data/demo .snakemake dist

@@ -31,7 +31,7 @@ def limb():
 @pytest.mark.parametrize("arguments, line", [
     (lambda V, F, T: (V, F, T[:10]), "V_target: 10 vertices, the reference has 362"),
     (lambda V, F, T: (V, F.astype(float), T), "F: float64 indices, expected integers"),
-    (lambda V, F, T: (V, F, T * np.nan), "V_target: 362 rows with NaN or infinite values"),
+    (lambda V, F, T: (V, F, T * np.nan), "V_target: 362 of 362 rows with NaN or infinite values (first: row 0)"),
     (lambda V, F, T: (V[:, :2], F, T), "V_reference: shape (362, 2), expected (k, 3)"),
     (lambda V, F, T: (V, F + 1, T), "F: a vertex index out of range 0..361"),
 ])

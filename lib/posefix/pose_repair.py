@@ -159,8 +159,10 @@ def _checked(V_reference, F, V_target):
             raise InputError(name, f"shape {array.shape}, expected (k, 3)")
         if kind is np.int64 and not np.issubdtype(array.dtype, np.integer):
             raise InputError(name, f"{array.dtype} indices, expected integers")
-        if not np.isfinite(array).all():
-            raise InputError(name, f"{(~np.isfinite(array).all(axis=1)).sum()} rows with NaN or infinite values")
+        bad = ~np.isfinite(array).all(axis=1)
+        if bad.any():
+            raise InputError(name, f"{bad.sum()} of {len(array)} rows with NaN or infinite values (first: row "
+                                   f"{np.argmax(bad)})")
         arrays.append(np.array(array, dtype=kind))
     V_ref, F, V_tgt = arrays
     if ((F < 0) | (F >= len(V_ref))).any():

@@ -63,8 +63,8 @@ def test_no_worker_outlives_its_parent_killed_with_sigkill(tmp_path):
     """A process running the check's runs on 2 workers (here runs that sleep a minute) is killed with SIGKILL, as
     a stage's parent can be: 2 s later no worker is left running (issue 50)."""
     script = tmp_path / "runs.py"
-    script.write_text("import time\nfrom posefix.downstream.check import _starmap\n"
-                      "if __name__ == '__main__':\n    list(_starmap(time.sleep, [(60,), (60,)], 2))\n")
+    script.write_text("import time\nfrom posefix.workflow.processes import ordered_map\n"
+                      "if __name__ == '__main__':\n    list(ordered_map(time.sleep, [(60,), (60,)], 2))\n")
     parent = psutil.Process(subprocess.Popen([sys.executable, str(script)]).pid)
     deadline = time.monotonic() + 60
     while len(workers := [c for c in parent.children() if "spawn_main" in " ".join(c.cmdline())]) < 2:

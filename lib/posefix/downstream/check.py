@@ -6,14 +6,8 @@ interpolation weights alpha and bending stiffnesses k_b (single settings are fra
 far-apart handle vertices are pinned at their linear blend in every run.
 """
 
-import ctypes
 import itertools
 import logging
-import multiprocessing
-import os
-import signal
-import sys
-from concurrent.futures import ProcessPoolExecutor
 from contextlib import nullcontext
 from dataclasses import dataclass
 
@@ -22,6 +16,7 @@ from threadpoolctl import threadpool_limits
 
 from posefix.downstream.gauss_newton import STOP_REASONS, gauss_newton
 from posefix.mesh.shells import mesh_hinges, shell_energy
+from posefix.workflow.processes import ordered_map
 
 log = logging.getLogger(__name__)
 
@@ -147,7 +142,7 @@ def downstream_check(V_ref, F, examples, alphas=(1.0,), k_bend=(1e-2,), k_stretc
     in_process = workers > 1 and len(V_ref) < SPAWN_MIN_VERTICES
     with threadpool_limits(1) if in_process else nullcontext():  # one BLAS thread, as a worker: the same bits
         for i, ((alpha, kb, example), res) in enumerate(
-                zip(grid, _starmap(deform_towards, jobs, 1 if in_process else workers)), 1):
+                zip(grid, ordered_map(deform_towards, jobs, 1 if in_process else workers)), 1):
             log.info("[%d/%d] alpha %g k_b %g %-8s: %3d iterations, %s, E %.3g (%.1f s)", i, len(grid), alpha, kb,
                      names[example], res.iterations, res.reason, res.errors[-1], res.seconds)
             runs.append(res)
@@ -159,27 +154,3 @@ def downstream_check(V_ref, F, examples, alphas=(1.0,), k_bend=(1e-2,), k_stretc
     return check
 
 
-def _starmap(fn, jobs, workers):
-    """``fn(*job)`` for every job of ``jobs`` (list of tuples), in order: one after the other, or in
-    ``workers`` spawned processes with one BLAS thread each. Yields the results."""
-    if workers <= 1 or len(jobs) <= 1:
-        yield from itertools.starmap(fn, jobs)
-        return
-    with ProcessPoolExecutor(min(workers, len(jobs)), mp_context=multiprocessing.get_context("spawn"),
-                             initializer=_worker_start, initargs=(os.getpid(),)) as pool:
-        yield from pool.map(fn, *zip(*jobs))
-
-
-PR_SET_PDEATHSIG = 1
-"""Linux's ``prctl`` option: the signal a process gets when the thread that started it ends."""
-
-
-def _worker_start(parent):
-    """A worker's set-up: one BLAS thread, and (Linux) SIGKILL when its parent, the process ``parent`` (pid), dies,
-    however it dies: a killed stage leaves no Gauss-Newton run behind. Exits at once where the parent is already
-    gone (it died before the signal was asked for)."""
-    threadpool_limits(1)
-    if sys.platform.startswith("linux"):
-        ctypes.CDLL(None, use_errno=True).prctl(PR_SET_PDEATHSIG, signal.SIGKILL)
-        if os.getppid() != parent:
-            os._exit(1)

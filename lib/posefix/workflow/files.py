@@ -1,15 +1,17 @@
 """Where the workflow's files are: beside the package in an installed wheel, or the checkout of an editable install.
 
 The workflow (``Snakefile``, ``rules/``, ``stages/``, ``schemas/``, ``config.yaml``, ``profiles/``, ``envs/``,
-``examples/``) keeps the repository's top-level layout; ``setup.py`` copies it into the wheel as the package data
+``examples/``, and the Blender add-on's ``blender/``) keeps the repository's top-level layout; ``setup.py`` copies it
+into the wheel as the package data
 ``posefix/_workflow/`` (:data:`WORKFLOW_FILES`). ``pip install -e`` leaves it in the checkout.
 """
 
 from importlib import resources
 from pathlib import Path
 
-WORKFLOW_FILES = ("Snakefile", "config.yaml", "rules", "stages", "schemas", "profiles", "envs", "examples")
-"""The repository's top-level files and folders that make the workflow, shipped in the wheel under ``_workflow``."""
+WORKFLOW_FILES = ("Snakefile", "config.yaml", "rules", "stages", "schemas", "profiles", "envs", "examples", "blender")
+"""The repository's top-level files and folders that make the workflow (and the Blender add-on, which starts it),
+shipped in the wheel under ``_workflow``."""
 
 PACKAGED = "_workflow"
 """The package-data folder of the workflow in an installed wheel."""
