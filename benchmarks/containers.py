@@ -8,9 +8,10 @@ start (every pose's digest, so that only changed poses rerun), and the write-bac
 Seconds are the median of three, on this machine.
 
 With ../shared/data present, the lion library (every pose) also runs through the workflow as a folder of OBJ files,
-as one USD file (frames) and as one GLB file (morph targets), space-time alone with one downstream step: the
-statuses and intersecting-face counts of the three summaries side by side (the float32 the container files hold
-may move a count; the test suite compares the demo limb's containers bit for bit).
+as one USD file (frames), as one GLB file (morph targets) and, where Blender is (the checkout's .venv-blender, or
+$POSEFIX_BLENDER), as one Alembic cache (frames), space-time alone with one downstream step: the statuses and
+intersecting-face counts of the summaries side by side (the float32 the container files hold may move a count; the
+test suite compares the demo limb's containers bit for bit).
 """
 
 import argparse
@@ -80,20 +81,29 @@ def row(kind, path, scratch):
     return f"| {kind} | {size / 1e6:.0f} | {read:.2f} | {digests:.2f} | {write:.2f} |"
 
 
+BLENDER_PYTHON = ROOT / ".venv-blender" / "bin" / "python"
+
+
 def lion_runs(work, cores):
-    """The lion library run as a folder, a .usdc and a .glb file in ``work``: {kind: [(pose, status, intersecting
+    """The lion library run as a folder and as each container file in ``work``: {kind: [(pose, status, intersecting
     faces)] in pose order}."""
-    usd, glb, names = library_into_containers(LION, work, "lion")
+    if BLENDER_PYTHON.is_file():
+        os.environ.setdefault("POSEFIX_BLENDER", str(BLENDER_PYTHON))
+    files, names = library_into_containers(LION, work, "lion", alembic="POSEFIX_BLENDER" in os.environ)
     runs = {}
-    for kind, library in (("folder", LION), ("usdc", usd), ("glb", glb)):
+    for kind, library in {"folder": LION, **files}.items():
         name = "lion-poses" if kind == "folder" else "lion"
         subprocess.run([sys.executable, "-m", "snakemake", "-s", str(ROOT / "Snakefile"), "--directory",
                         str(work / kind), "--cores", str(cores), f"reports/{name}/summary.json", "--config",
-                        f"library={library}", "baselines=[]", "downstream={'max_iters': 1}"], check=True)
+                        f"library={library}", "baselines=[]", "downstream={'max_iters': 1}"]
+                       + (["reference=1"] if kind == "abc" else []), check=True)
         summary = json.loads((work / kind / "reports" / name / "summary.json").read_text())
         runs[kind] = [(pose, *entry) for pose, entry in zip(names, [
             (entry_status(e)[0], e["intersecting_faces"]) for e in summary["poses"]])]
     return runs
+
+
+KINDS = {"usdc": ".usdc (frames)", "glb": ".glb (morph targets)", "abc": ".abc (frames, through Blender)"}
 
 
 def lion_section(runs):
@@ -101,15 +111,17 @@ def lion_section(runs):
     def cell(status, faces):
         return f"{status}, {faces['repaired_new']} new, {faces['repaired']} in all"
 
-    rows = [f"| {folder[0]} | {cell(*folder[1:])} | {cell(*usdc[1:])} | {cell(*glb[1:])} |"
-            for folder, usdc, glb in zip(runs["folder"], runs["usdc"], runs["glb"])]
+    kinds = [kind for kind in KINDS if kind in runs]
+    rows = [f"| {pose[0]} | " + " | ".join(cell(*runs[kind][k][1:]) for kind in ["folder", *kinds]) + " |"
+            for k, pose in enumerate(runs["folder"])]
     same = all(a[1] == b[1] and {k: v for k, v in a[2].items() if k != "repaired"} ==
-               {k: v for k, v in b[2].items() if k != "repaired"} for kind in ("usdc", "glb")
+               {k: v for k, v in b[2].items() if k != "repaired"} for kind in kinds
                for a, b in zip(runs["folder"], runs[kind]))
-    return ["### The lion library as a folder, one USD and one GLB file", "",
+    return ["### The lion library as a folder and as one file", "",
             "Space-time alone, one downstream step; each pose's status and intersecting faces after the repair "
             "(new ones, and in all: the reference's own 138 it keeps may move with the float32 input).", "",
-            "| pose | folder of OBJ | .usdc (frames) | .glb (morph targets) |", "|---|---|---|---|", *rows, "",
+            "| pose | folder of OBJ | " + " | ".join(KINDS[kind] for kind in kinds) + " |",
+            "|---|---|" + "---|" * len(kinds), *rows, "",
             f"Statuses and every count but the total as the folder's: **{'yes' if same else 'no'}**.", ""]
 
 

@@ -42,6 +42,10 @@ if workflow.is_main_process:  # not in the jobs a cluster executor starts: they 
 # The rules call `python`: a conda environment's under --sdm conda (envs/posefix.yaml), else the interpreter that
 # runs Snakemake (the venv's under `make run` and `posefix repair`), first on the PATH of every job.
 put_interpreter_first_on_path()
+# Alembic caches are read and written by Blender (posefix.io.formats.alembic): the checkout's bpy environment (make
+# test makes it) unless POSEFIX_BLENDER names another Python with bpy, or Blender.
+if (Path(workflow.basedir) / ".venv-blender" / "bin" / "python").is_file():
+    os.environ.setdefault("POSEFIX_BLENDER", str(Path(workflow.basedir) / ".venv-blender" / "bin" / "python"))
 
 
 VIEWER_PAGE = [str(package_folder() / "report" / f) for f in VIEWER_FILES.values()]

@@ -162,11 +162,11 @@ LIBRARY = [
              "posefix: error: {run}/nested: no mesh files (.obj, .ply, .off, optionally .gz)",
              args=("repair", "{run}/nested"), make=lambda lib: shutil.copytree(lib, lib.parent / "nested" / "sub")),
     BadInput("library", "a folder that does not exist",
-             "posefix: error: {run}/nowhere: not a folder, nor a USD or glTF file (.usd, .usda, .usdc, .usdz, .gltf, "
-             ".glb)", args=("repair", "{run}/nowhere")),
+             "posefix: error: {run}/nowhere: not a folder, nor a USD, glTF or Alembic file (.usd, .usda, .usdc, .usdz, "
+             ".gltf, .glb, .abc)", args=("repair", "{run}/nowhere")),
     BadInput("library", "a text file as the library",
-             "posefix: error: {lib}/notes.txt: not a folder, nor a USD or glTF file (.usd, .usda, .usdc, .usdz, "
-             ".gltf, .glb)", args=("repair", "{lib}/notes.txt"), make=_text("notes.txt", "poses")),
+             "posefix: error: {lib}/notes.txt: not a folder, nor a USD, glTF or Alembic file (.usd, .usda, .usdc, "
+             ".usdz, .gltf, .glb, .abc)", args=("repair", "{lib}/notes.txt"), make=_text("notes.txt", "poses")),
     BadInput("library", "a reference and no pose", "posefix: error: {run}/alone: no target poses besides the reference",
              args=("repair", "{run}/alone"), make=lambda lib: _copy(lib, "alone", ["reference.obj"])),
     BadInput("library", "two references",

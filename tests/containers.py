@@ -100,15 +100,34 @@ def write_gltf(path, V_ref, poses, F, names=None, sparse=(), mesh="Body"):
     return path
 
 
-def library_into_containers(folder, out, stem):
+def library_into_containers(folder, out, stem, alembic=False):
     """The pose library in ``folder`` (a reference ``*-reference.*`` and its poses) written as ``<stem>.usdc`` (the
-    poses as frames 1, 2, ... after the reference's default points) and ``<stem>.glb`` (morph targets named by the
-    pose files) in ``out`` (benchmarks/containers.py); returns the two paths and the pose names in file order."""
+    poses as frames 1, 2, ... after the reference's default points), ``<stem>.glb`` (morph targets named by the pose
+    files) and, with ``alembic``, ``<stem>.abc`` (the reference as frame 1, the poses after it) in ``out``
+    (benchmarks/containers.py); returns the paths by kind and the pose names in file order."""
     from posefix.io.library import discover_library
     from posefix.io.meshes import read_mesh
     library = discover_library(folder)
     V_ref, F = read_mesh(library.reference.path)
     poses = [read_mesh(p.path)[0] for p in library.poses]
     names = [p.name for p in library.poses]
-    return (write_usd_frames(out / f"{stem}.usdc", V_ref, poses, F),
-            write_gltf(out / f"{stem}.glb", V_ref, poses, F, names), names)
+    paths = {"usdc": write_usd_frames(out / f"{stem}.usdc", V_ref, poses, F),
+             "glb": write_gltf(out / f"{stem}.glb", V_ref, poses, F, names)}
+    if alembic:
+        paths["abc"] = write_alembic_frames(out / f"{stem}.abc", V_ref, poses, F)
+    return paths, names
+
+
+def write_alembic_frames(path, V_ref, poses, F, mesh="Body"):
+    """An Alembic cache of one mesh ``mesh`` whose frames 1, 2, ... are ``V_ref`` then ``poses`` (float32), written
+    by Blender's exporter ($POSEFIX_BLENDER: a Python with bpy; posefix.io.formats.alembic's script)."""
+    import tempfile
+
+    from posefix.io.formats.alembic import run_blender
+    points = np.stack([V_ref, *poses]).astype(np.float32)
+    with tempfile.TemporaryDirectory() as scratch:
+        job = f"{scratch}/job.npz"
+        np.savez(job, mesh=mesh, counts=np.full(len(F), 3), indices=np.asarray(F).ravel(),
+                 frames=np.arange(1, len(points) + 1), points=points)
+        run_blender(path, "new", path, job)
+    return path

@@ -1,15 +1,16 @@
-"""The workflow on pose libraries in one USD or glTF file (issue 31): the demo limb (at 12 vertices per ring instead
-of 40, 362 vertices: a quicker repair) stored as USD frames, USD blend shapes and glTF morph targets repairs exactly
-as the same coordinates in OBJ files, and each repair goes back into a file of the input's kind. (The lion library
-as one USD and one GLB file against its folder: `make bench`, benchmarks/containers.py.)"""
+"""The workflow on pose libraries in one USD, glTF or Alembic file (issues 31, 49): the demo limb (at 12 vertices per
+ring instead of 40, 362 vertices: a quicker repair) stored as USD frames, USD blend shapes, glTF morph targets and
+Alembic frames (written by Blender: where the bpy environment .venv-blender is) repairs exactly as the same
+coordinates in OBJ files, and each repair goes back into a file of the input's kind. (The lion library as one USD,
+GLB and Alembic file against its folder: `make bench`, benchmarks/containers.py.)"""
 
 import json
 
 import numpy as np
 import pytest
 
-from conftest import snakemake
-from containers import write_gltf, write_usd_blend_shapes, write_usd_frames
+from conftest import ROOT, snakemake
+from containers import write_alembic_frames, write_gltf, write_usd_blend_shapes, write_usd_frames
 from posefix.io.containers import open_container
 from posefix.io.meshes import read_mesh, write_mesh
 from posefix.workflow.demo import demo_library
@@ -22,6 +23,8 @@ POSES = ("demo-02", "demo-03")
 vertices), with the contact repair beside S0."""
 RUN = ("baselines=[contact]", "downstream={'max_iters': 1}")
 """Their config: one downstream step (the repaired meshes do not depend on the check)."""
+BLENDER_PYTHON = ROOT / ".venv-blender" / "bin" / "python"
+"""The bpy environment that reads and writes Alembic (the workflow finds it in the checkout)."""
 
 
 def targets(name, path):
@@ -54,6 +57,10 @@ def limb(tmp_path_factory):
              "usd frames": write_usd_frames(work / "frames.usda", V_ref, chosen, F),
              "usd blend shapes": write_usd_blend_shapes(work / "shapes.usdc", V_ref, chosen, F, POSES, sparse=(0,)),
              "glb": write_gltf(work / "targets.glb", V_ref, chosen, F, POSES, sparse=(1,))}
+    if BLENDER_PYTHON.is_file():
+        with pytest.MonkeyPatch.context() as env:
+            env.setenv("POSEFIX_BLENDER", str(BLENDER_PYTHON))
+            files["abc"] = write_alembic_frames(work / "frames.abc", V_ref, chosen, F)
     runs = {}
     for kind, path in files.items():
         run = work / kind.replace(" ", "-")
@@ -68,12 +75,16 @@ def _repaired(run, name, repair, pose):
     return read_mesh(run / "results" / name / repair / f"{pose}.ply")
 
 
-@pytest.mark.parametrize("kind", ["usd frames", "usd blend shapes", "glb"])
-def test_a_container_repairs_bit_for_bit_as_obj_files_and_is_written_back(limb, kind):
+@pytest.mark.parametrize("kind", ["usd frames", "usd blend shapes", "glb", "abc"])
+def test_a_container_repairs_bit_for_bit_as_obj_files_and_is_written_back(limb, kind, monkeypatch):
+    if kind not in limb:
+        pytest.skip(f"no bpy environment at {BLENDER_PYTHON} to read and write Alembic (make test makes it)")
+    monkeypatch.setenv("POSEFIX_BLENDER", str(BLENDER_PYTHON))
     (obj_run, _), (run, path) = limb["obj"], limb[kind]
     name = path.stem
     box = open_container(path)
-    members = [m for m in box.members if m != box.rest]  # frames-1, frames-2 or the demo pose names
+    reference = box.rest or next(iter(box.members))  # an Alembic cache's first frame
+    members = [m for m in box.members if m != reference]  # frames-1, frames-2 or the demo pose names
     summary = json.loads((run / "reports" / name / "summary.json").read_text())
     assert [e["pose"] for e in summary["poses"]] == members
     for repair in ("repaired", "repaired-contact"):
@@ -84,7 +95,7 @@ def test_a_container_repairs_bit_for_bit_as_obj_files_and_is_written_back(limb, 
             X, F = read_mesh(obj_run / "results" / "limb" / repair / f"{pose}.obj")
             V, F2 = _repaired(run, name, repair, member)
             assert np.array_equal(V, X) and np.array_equal(F, F2), (kind, repair, pose)  # bit for bit
-            if kind == "usd frames":  # point3f[]: the float32 of the repaired positions
+            if kind in ("usd frames", "abc"):  # point3f[], Alembic's P: the float32 of the repaired positions
                 assert np.array_equal(back.points(member), X.astype(np.float32).astype(np.float64))
             else:  # float32 base plus float32 offsets
                 np.testing.assert_allclose(back.points(member), X, rtol=0, atol=4e-7 * np.abs(X).max())

@@ -163,8 +163,8 @@ def test_a_usd_or_gltf_file_is_a_library_named_after_the_file(tmp_path):
     assert library_name(args) == "walk.cycle"
     assert argument_problem(args) == f"{tmp_path / 'walk.cycle.usdz'}: no such file"
     args = build_parser().parse_args(["repair", str(tmp_path / "walk.fbx")])
-    assert argument_problem(args) == (f"{tmp_path / 'walk.fbx'}: not a folder, nor a USD or glTF file (.usd, .usda, "
-                                      ".usdc, .usdz, .gltf, .glb)")
+    assert argument_problem(args) == (f"{tmp_path / 'walk.fbx'}: not a folder, nor a USD, glTF or Alembic file (.usd, "
+                                      ".usda, .usdc, .usdz, .gltf, .glb, .abc)")
     (tmp_path / "reports").mkdir()
     (tmp_path / "reports" / "summary.json").write_text('{"poses": []}')
     (tmp_path / "repaired").mkdir()

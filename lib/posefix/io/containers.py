@@ -1,7 +1,9 @@
-"""Pose libraries in one file: USD (time-sampled points, UsdSkel blend shapes) and glTF morph targets.
+"""Pose libraries in one file: USD (time-sampled points, UsdSkel blend shapes), glTF morph targets and Alembic
+caches (frames).
 
 A container holds one mesh whose poses are its frames, blend shapes or morph targets. Its format module
-(:mod:`posefix.io.formats.usd`, :mod:`posefix.io.formats.gltf`, imported on first use: usd-core is slow to import)
+(:mod:`posefix.io.formats.usd`, :mod:`posefix.io.formats.gltf`, :mod:`posefix.io.formats.alembic`, imported on first
+use: usd-core is slow to import)
 opens it as a :class:`Container`: the pose names (members) in file order, the rest pose, the triangles, and per
 member its points and a phrase saying where it is in the file. ``Container.write`` writes the same file with some
 members' positions replaced. Every problem is an :class:`~posefix.io.errors.InputError` naming the file, and the
@@ -22,7 +24,8 @@ import numpy as np
 from posefix.io.errors import InputError
 from posefix.io.files import atomic_write_bytes
 
-CONTAINER_SUFFIXES = {".usd": "usd", ".usda": "usd", ".usdc": "usd", ".usdz": "usd", ".gltf": "gltf", ".glb": "gltf"}
+CONTAINER_SUFFIXES = {".usd": "usd", ".usda": "usd", ".usdc": "usd", ".usdz": "usd", ".gltf": "gltf", ".glb": "gltf",
+                      ".abc": "alembic"}
 """Format module (under :mod:`posefix.io.formats`) by lower-case file extension."""
 REST = "reference"
 """Pose name suffix of a container's rest pose: ``<file stem>-reference`` (the base points of blend shapes or
@@ -90,7 +93,7 @@ class Container(ABC):
 
 
 def container_format(path):
-    """Name of the format module of the container file ``path`` (``usd``, ``gltf``), or None."""
+    """Name of the format module of the container file ``path`` (``usd``, ``gltf``, ``alembic``), or None."""
     return CONTAINER_SUFFIXES.get(os.path.splitext(str(path))[1].lower())
 
 
@@ -163,6 +166,20 @@ def check_points(path, where, P, n):
     bad = ~np.isfinite(P).all(axis=1)
     if bad.any():
         raise InputError(path, f"{where}: {bad.sum()} points are NaN or infinite (first: point {np.argmax(bad)})")
+
+
+def frame_labels(stem, times):
+    """``<stem>-<frame>`` for each time code (float); integer frames zero-padded to the widest.
+
+    Examples
+    --------
+    >>> frame_labels("anim", [1.0, 2.0, 12.0])
+    ['anim-01', 'anim-02', 'anim-12']
+    """
+    if all(float(t).is_integer() for t in times):
+        width = max(len(str(abs(int(t)))) for t in times)
+        return [f"{stem}-{'-' if t < 0 else ''}{abs(int(t)):0{width}d}" for t in times]
+    return [f"{stem}-{t:g}" for t in times]
 
 
 def pose_names(path, labels, rest=None):

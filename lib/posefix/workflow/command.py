@@ -63,8 +63,8 @@ def build_parser():
     report = commands.add_parser("report", help="the HTML report of a repaired library")
     for sub in (repair, report):
         sub.add_argument("library", nargs="?", default=None,
-                         help="folder of the pose library (a reference and its poses), or one USD or glTF file of "
-                              "its poses; none: the built-in demo")
+                         help="folder of the pose library (a reference and its poses), or one USD, glTF or Alembic "
+                              "file of its poses; none: the built-in demo")
         sub.add_argument("--config", nargs="+", default=[], metavar="KEY=VALUE",
                          help="config overrides, as snakemake --config (e.g. reference=a.obj poses=b,c), nested "
                               "keys with dots (fit.batch=64)")
@@ -145,7 +145,7 @@ def argument_problem(args):
         return f"no workflow beside the package ({WORKFLOW}): reinstall posefix (pip install posefix, or pip install -e .)"
     if args.library is not None and not Path(args.library).is_dir():
         if not container_format(args.library):
-            return f"{args.library}: not a folder, nor a USD or glTF file ({', '.join(CONTAINER_SUFFIXES)})"
+            return f"{args.library}: not a folder, nor a USD, glTF or Alembic file ({', '.join(CONTAINER_SUFFIXES)})"
         if not Path(args.library).is_file():
             return f"{args.library}: no such file"
     loose = [entry for entry in args.config if not re.match(r"[A-Za-z_][\w.]*=", entry)]

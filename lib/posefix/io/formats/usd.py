@@ -15,7 +15,7 @@ import tempfile
 import numpy as np
 from pxr import Tf, Usd, UsdGeom, UsdSkel, UsdUtils, Vt
 
-from posefix.io.containers import REST, Container, container_stem, fan_triangles, pose_names
+from posefix.io.containers import REST, Container, container_stem, fan_triangles, frame_labels, pose_names
 from posefix.io.errors import InputError
 from posefix.io.files import atomic_path
 
@@ -74,7 +74,7 @@ def open_container(path, mesh=None):
     times = geom.GetPointsAttr().GetTimeSamples()
     rest = geom.GetPointsAttr().Get(Usd.TimeCode.Default())
     if times:
-        members = dict(zip(pose_names(path, _frame_labels(container_stem(path), times)), times))
+        members = dict(zip(pose_names(path, frame_labels(container_stem(path), times)), times))
         if rest is not None:
             members = {f"{container_stem(path)}-{REST}": None, **members}
         details = {}
@@ -119,14 +119,6 @@ def _mesh_prim(path, stage, mesh):
     if len(meshes) > 1:
         raise InputError(path, f"{len(meshes)} meshes ({listed}): choose one with the config's mesh: <prim path>")
     return meshes[0]
-
-
-def _frame_labels(stem, times):
-    """``<stem>-<frame>`` for each time code; integer frames zero-padded to the widest."""
-    if all(float(t).is_integer() for t in times):
-        width = max(len(str(abs(int(t)))) for t in times)
-        return [f"{stem}-{'-' if t < 0 else ''}{abs(int(t)):0{width}d}" for t in times]
-    return [f"{stem}-{t:g}" for t in times]
 
 
 def _blend_shapes(path, prim, rest):
