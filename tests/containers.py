@@ -1,5 +1,5 @@
-"""Pose libraries written into USD and glTF files by the formats' own libraries (usd-core, pygltflib), for the
-tests of the container readers and writers and of the workflow on them."""
+"""Pose libraries written into USD, glTF and Alembic files by the formats' own libraries (usd-core, pygltflib;
+Blender's Alembic exporter), for the tests of the container readers and writers and of the workflow on them."""
 
 import numpy as np
 import pygltflib
