@@ -39,3 +39,20 @@ def test_contacts_looked_at_in_chunks_are_the_same(monkeypatch):
     whole = contact_vertices(frames, F, V, distance=0.15, radius=0.5)
     monkeypatch.setattr(contacts_module, "_CHUNK", 64)
     assert whole.any() and np.array_equal(contact_vertices(frames, F, V, distance=0.15, radius=0.5), whole)
+
+
+def test_non_neighbouring_on_the_vertices_around_each_chunk_is_the_whole_graphs():
+    """Dijkstra on the vertices within the radius of a chunk's box gives the whole graph's answer: every pair of a
+    sphere's vertices and faces, 16 sources a chunk, against the whole graph's distances."""
+    from scipy.sparse.csgraph import dijkstra
+
+    V, F = icosphere(3)
+    graph = contacts_module.edge_graph(V, F)
+    rng = np.random.default_rng(0)
+    pairs = np.stack([rng.integers(0, len(V), 4000), rng.integers(0, len(F), 4000)], axis=1)
+    for radius in (0.2, 0.7, 3.0):
+        whole = dijkstra(graph, directed=False, limit=radius)
+        expected = whole[pairs[:, :1], F[pairs[:, 1]]].min(axis=1) >= radius
+        got = contacts_module.non_neighbouring(pairs, F, graph, radius, V, rows=16)
+        assert 0 < expected.sum() < len(pairs) or radius == 3.0
+        assert np.array_equal(got, expected)

@@ -141,7 +141,7 @@ def contact_vertices(frames, F, V_ref, distance, radius):
             unsure.append(np.stack([np.full(len(rest), frame), vv[rest], ff[rest]], 1))
     unsure = np.concatenate(unsure) if unsure else np.zeros((0, 3), dtype=np.int64)
     unsure = unsure[~out[unsure[:, 0], unsure[:, 1]]]  # a vertex already in contact needs no search
-    far = non_neighbouring(unsure[:, 1:], F, graph, radius)
+    far = non_neighbouring(unsure[:, 1:], F, graph, radius, V_ref)
     out[unsure[far, 0], unsure[far, 1]] = True
     log.info("contacts per frame (%d patches, %d pairs checked exactly): %s vertices", k, len(unsure),
              ", ".join(str(c) for c in out.sum(axis=1)))
@@ -210,8 +210,14 @@ def _vertex_bounds(pairs, F, patch, to_seed, between, radius):
     return (via + spread < radius).any(axis=1), (via - spread >= radius).all(axis=1)
 
 
-def non_neighbouring(pairs, F, graph, radius, rows=128):
+def non_neighbouring(pairs, F, graph, radius, V, rows=128):
     """Mask of vertex-face pairs whose face is at least ``radius`` away along ``graph``.
+
+    The sources go in spatial order, ``rows`` at a time, and each chunk's Dijkstra runs on the vertices within
+    ``radius`` of the chunk's box only: a path shorter than ``radius`` along the edges stays within that distance
+    in space, so the distances below ``radius`` are the whole graph's (kids at 239k vertices, 8.0 M pairs: the same
+    classify.h5, its contacts in 298 s instead of 328 s; each source's ball of 0.1 d still holds thousands of
+    vertices, whose distances are what costs).
 
     Parameters
     ----------
@@ -221,8 +227,10 @@ def non_neighbouring(pairs, F, graph, radius, rows=128):
     graph : (n, n) sparse
         Edge lengths (:func:`edge_graph`).
     radius : float
+    V : (n, 3) float
+        The graph's vertex positions (its edge lengths are their distances).
     rows : int
-        Dijkstra sources per chunk (bounds memory to ``rows x n`` floats).
+        Dijkstra sources per chunk.
 
     Returns
     -------
@@ -230,13 +238,23 @@ def non_neighbouring(pairs, F, graph, radius, rows=128):
     """
     keep = np.ones(len(pairs), dtype=bool)
     sources = np.unique(pairs[:, 0])
-    for start in range(0, len(sources), rows):
-        chunk = sources[start:start + rows]
-        dist = dijkstra(graph, directed=False, indices=chunk, limit=radius)
-        at = np.searchsorted(chunk, pairs[:, 0])
-        inside = np.flatnonzero((at < len(chunk)) & (chunk[np.minimum(at, len(chunk) - 1)] == pairs[:, 0]))
-        near = dist[at[inside][:, None], F[pairs[inside, 1]]].min(axis=1) < radius
-        keep[inside[near]] = False
+    cells = np.floor((V[sources] - V.min(axis=0)) / radius).astype(np.int64)
+    sources = sources[np.lexsort(cells.T[::-1])]  # cell by cell: a chunk's sources lie close together
+    rank = np.empty(len(V), dtype=np.int64)
+    rank[sources] = np.arange(len(sources))
+    order = np.argsort(rank[pairs[:, 0]], kind="stable")
+    starts = np.searchsorted(rank[pairs[order, 0]], np.arange(0, len(sources) + rows, rows))
+    graph = sp.csr_matrix(graph)
+    for c, start in enumerate(range(0, len(sources), rows)):
+        chunk, mine = sources[start:start + rows], order[starts[c]:starts[c + 1]]
+        lo, hi = V[chunk].min(axis=0) - radius, V[chunk].max(axis=0) + radius
+        around = np.flatnonzero(((V >= lo) & (V <= hi)).all(axis=1))
+        local = np.full(len(V), -1)
+        local[around] = np.arange(len(around))
+        dist = dijkstra(graph[around][:, around], directed=False, indices=local[chunk], limit=radius)
+        dist = np.concatenate([dist, np.full((len(chunk), 1), np.inf)], axis=1)  # column -1: outside
+        near = dist[rank[pairs[mine, 0]][:, None] - start, local[F[pairs[mine, 1]]]].min(axis=1) < radius
+        keep[mine[near]] = False
     return keep
 
 
