@@ -127,7 +127,7 @@ def _new_log(folder):
 def _run(settings, out, cores, log_path):
     """Run the workflow in ``out`` with the config ``settings`` on ``cores``; its output into ``log_path``, the
     progress onto this module's logger; :class:`PosefixError` when it fails."""
-    cwd, path = Path.cwd(), os.environ.get("PATH", "")
+    cwd, environment = Path.cwd(), dict(os.environ)  # the Snakefile sets PATH and POSEFIX_BLENDER: not the caller's
     try:
         with open(log_path, "w", encoding="utf-8", buffering=1) as stream, _output_into(stream):
             _execute(settings, out, cores)
@@ -135,7 +135,8 @@ def _run(settings, out, cores, log_path):
         raise PosefixError(_failure(exc, log_path, out)) from None
     finally:
         os.chdir(cwd)
-        os.environ["PATH"] = path
+        os.environ.clear()
+        os.environ.update(environment)
 
 
 @contextlib.contextmanager
