@@ -200,10 +200,11 @@ class BackgroundRun(threading.Thread):
         (an interrupted session)."""
         if wait:
             self.join(timeout=600 + RUN_TIMEOUT + 60)
-        else:
-            for child in psutil.Process().children():
-                if str(self.work) in " ".join(child.cmdline()):
-                    child.terminate()  # coreutils' timeout, which passes the signal on to the workflow
+        else:  # coreutils' timeout passes TERM on to the workflow, which cancels its jobs, and KILLs it 10 s later
+            runs = [child for child in psutil.Process().children() if str(self.work) in " ".join(child.cmdline())]
+            for child in runs:
+                child.terminate()
+            psutil.wait_procs(runs, timeout=30)  # the controller still up, so that the jobs can be cancelled
         down = _run([CLUSTER / "slurm-down.sh", self.state], 120, env=self.env)
         print(down.stdout, down.stderr, sep="")
 

@@ -12,12 +12,15 @@
 # is idle. Refuses (exit 3) when /etc/slurm/slurm.conf is another configuration.
 # Idempotent: daemons already running from STATE_DIR are kept.
 # Ports: $POSEFIX_SLURMCTLD_PORT (6817) and $POSEFIX_SLURMD_PORT (6818).
+# POSEFIX_SLURM_ETC_LINK=0 leaves /etc/slurm/slurm.conf alone, for a second cluster beside the first
+# (other ports and STATE_DIR): its daemons run and take jobs, but a job's own `srun` reads /etc's.
 # Exit status: 0 ready, 3 cannot run here (not root, no apt-get, install failed), 1 anything else.
 set -euo pipefail
 
 STATE=${1:-${POSEFIX_SLURM_DIR:-/tmp/posefix-slurm}}
 CTLD_PORT=${POSEFIX_SLURMCTLD_PORT:-6817}
 SLURMD_PORT=${POSEFIX_SLURMD_PORT:-6818}
+ETC_LINK=${POSEFIX_SLURM_ETC_LINK:-1}
 READY_TIMEOUT=${POSEFIX_SLURM_READY_TIMEOUT:-60}
 
 say() { echo "slurm-up: $*"; }
@@ -55,7 +58,7 @@ CONF=$STATE/slurm.conf
 export SLURM_CONF=$CONF
 
 ETC_CONF=/etc/slurm/slurm.conf   # see step 3; checked before anything starts
-if [ -e "$ETC_CONF" ] && ! { [ -L "$ETC_CONF" ] && [ "$(readlink "$ETC_CONF")" = "$CONF" ]; }; then
+if [ "$ETC_LINK" != 0 ] && [ -e "$ETC_CONF" ] && ! { [ -L "$ETC_CONF" ] && [ "$(readlink "$ETC_CONF")" = "$CONF" ]; }; then
     cannot "$ETC_CONF exists (another SLURM configuration on this machine); not replacing it"
 fi
 
@@ -152,7 +155,9 @@ fi
 # The jobs' own `srun` (snakemake-executor-plugin-slurm-jobstep) runs with every SLURM_* variable
 # but the job's id removed, SLURM_CONF included: it finds the configuration only at the default
 # /etc/slurm/slurm.conf, so that becomes a link to ours (removed again by slurm-down.sh).
-if [ -L "$ETC_CONF" ] && [ "$(readlink "$ETC_CONF")" = "$CONF" ]; then
+if [ "$ETC_LINK" = 0 ]; then
+    say "leaving $ETC_CONF alone (POSEFIX_SLURM_ETC_LINK=0)"
+elif [ -L "$ETC_CONF" ] && [ "$(readlink "$ETC_CONF")" = "$CONF" ]; then
     :
 elif [ -L "$ETC_CONF" ] && [ ! -e "$ETC_CONF" ]; then
     say "replacing the dangling link $ETC_CONF -> $(readlink "$ETC_CONF")"
