@@ -11,18 +11,17 @@ from snakemake.utils import validate
 from posefix.workflow import demo
 from posefix.workflow.cli import config_flags, named_options, put_interpreter_first_on_path
 from posefix.workflow.command import failed_job_errors, recap_line
-from posefix.workflow.partial_summary import finished_poses, pose_errors, stage_finished, stale_files
+from posefix.workflow.partial_summary import finished_poses, partial_pack, partial_report, stale_files
+from posefix.workflow.plan import (exclude_options, exit_on_input_error, figure_report, library, memory_limit_mb,
+                                   pose_list, read_reference_vertices, repair_folders, repaired_container_files,
+                                   report_targets, summary_poses)
 from posefix.workflow.config_check import config_problems, folder_problems, typed_by_schema
-from posefix.io.errors import InputError
 from posefix.workflow.files import package_folder
 from posefix.workflow.fingerprint import CodeFingerprints
-from posefix.io.artifacts import read_artifact
-from posefix.io.containers import container_format, container_stem, member_digests, open_container
-from posefix.io.library import Library, container_library, discover_library, read_reference
+from posefix.io.containers import member_digests
 from posefix.workflow.locks import clear_stale_locks
 from posefix.workflow.memory import memory_problem, stage_memory_mb
 from posefix.workflow.resources import available_memory, device_problems
-from posefix.io.meshes import mesh_file
 from posefix.report.contents import POSE_FIGURES, TIMED_STAGES, VIEWER_FILES
 
 
@@ -87,41 +86,13 @@ def stage_code(name):
     return CODE.fingerprint(stage_script(name))
 
 
-def _pose_list(value):
-    """config['poses'] as a list (it may be given as 'a,b' on the command line)."""
-    if isinstance(value, str):
-        return [p.strip() for p in value.split(",") if p.strip()]
-    return value or None
-
-
-def _demo_library(wanted):
-    folder = config["demo"]["folder"]
-    reference = mesh_file(f"{folder}/{demo.REFERENCE_NAME}{demo.REFERENCE_SUFFIX}")
-    poses = [mesh_file(f"{folder}/{p.name}{p.suffix}") for p in demo.POSES]
-    if wanted:
-        unknown = sorted(set(wanted) - {p.name for p in poses})
-        if unknown:
-            raise InputError(folder, f"pose(s) not in the demo library: {', '.join(unknown)}")
-        poses = [p for p in poses if p.name in wanted]
-    return Library(folder=folder, name=config["name"] or "demo", reference=reference, poses=tuple(poses))
-
-
 def _library(wanted):
-    """The pose library, its poses ``wanted`` (all: None); input problems end the run with one line."""
-    try:
-        if config["library"] is None:
-            return _demo_library(wanted)
-        reference = None if config["reference"] is None else str(config["reference"])  # a frame: 12
-        if container_format(config["library"]):  # one USD or glTF file: its poses unpacked under results/
-            name = config["name"] or container_stem(config["library"])
-            return container_library(config["library"], f"{config['results']}/{name}/poses", reference=reference,
-                                     poses=wanted, name=name, mesh=config["mesh"])
-        return discover_library(config["library"], reference=reference, poses=wanted, name=config["name"])
-    except InputError as exc:
-        sys.exit(f"posefix: error: {exc}")
+    """The pose library, its poses ``wanted`` (all: None); a problem with its files ends the run in one line."""
+    with exit_on_input_error():
+        return library(config, wanted)
 
 
-LIBRARY = _library(_pose_list(config["poses"]))
+LIBRARY = _library(pose_list(config["poses"]))
 WHOLE_LIBRARY = _library(None) if config["poses"] else LIBRARY  # every pose of the folder (the summary's)
 POSES = [p.name for p in LIBRARY.poses]
 for _path, _cause in LIBRARY.refused if workflow.is_main_process else ():  # one line each; the others go on
@@ -139,46 +110,23 @@ BASELINES = config["baselines"]  # repairs beside S0, compared in the report
 BASELINE_CHOICES = ("medial", "volumetric", "contact")  # stage repair_<name> writes results/<library>/<pose>/<name>.h5
 
 
-def _memory_limit_mb():
-    """Memory this run may use (MB): the user's ``--resources mem_mb``; in a local run without it, the memory
-    available now, registered as the run's mem_mb so that Snakemake never starts jobs together that would not fit
-    (each rule asks for memory_mb() of its stage); 0 (no limit) on a cluster, where each job gets its own."""
-    given = workflow.global_resources.get("mem_mb")
-    if given is not None and given.value is not None:
-        return int(given.value)
-    if not workflow.local_exec:
-        return 0
-    limit = int(available_memory() / 1e6)
-    workflow.register_resource("mem_mb", limit)
-    return limit
-
-
-MEMORY_LIMIT_MB = _memory_limit_mb()
+# Memory this run may use (MB): the user's --resources mem_mb; in a local run without it, the memory available now,
+# registered as the run's mem_mb so that Snakemake never starts jobs together that would not fit (each rule asks for
+# memory_mb() of its stage); 0 (no limit) on a cluster, where each job gets its own.
+_GIVEN_MB = getattr(workflow.global_resources.get("mem_mb"), "value", None)
+MEMORY_LIMIT_MB = memory_limit_mb(_GIVEN_MB, workflow.local_exec, available_memory() / 1e6)
+if _GIVEN_MB is None and workflow.local_exec:
+    workflow.register_resource("mem_mb", MEMORY_LIMIT_MB)
 
 
 _VERTICES = {}
 
 
 def reference_vertices():
-    """Vertex count of the reference: from reference.h5 when validate_reference wrote it from this file, else from
-    the mesh file, or the USD or glTF file before it is unpacked (0 while it cannot be read: the demo's files not
-    yet written, or a bad file that validate_reference names)."""
+    """The reference's vertex count, read once it can be (0 until then: plan.read_reference_vertices)."""
     if "n" not in _VERTICES:
-        checked = Path(f"{RESULTS}/reference.h5")
-        try:
-            if checked.is_file() and checked.stat().st_mtime >= Path(LIBRARY.reference.path).stat().st_mtime:
-                _VERTICES["n"] = int(read_artifact(f"{RESULTS}/reference.h5", "validate", [])[1]["metrics"]["vertices"])
-            elif LIBRARY.container and not Path(LIBRARY.reference.path).is_file():  # not yet unpacked
-                _VERTICES["n"] = open_container(LIBRARY.container, LIBRARY.mesh).n
-            else:
-                _VERTICES["n"] = len(read_reference(LIBRARY.reference.path)[0])
-        except InputError as exc:  # a reference mesh file that is there and cannot be read: refused before any job
-            reference = Path(LIBRARY.reference.path)
-            _VERTICES["error"] = exc if Path(exc.path) == reference and reference.is_file() else None
-            return 0
-        except Exception:  # noqa: BLE001  (any other unreadable file: validate_reference names it)
-            return 0
-    return _VERTICES["n"]
+        _VERTICES.update(read_reference_vertices(RESULTS, LIBRARY))
+    return _VERTICES.get("n", 0)
 
 
 if workflow.is_main_process:  # an unreadable reference, or one too large for the run, is refused before any job
@@ -223,12 +171,7 @@ def library_files():
 
 def exclude_args(wildcards):
     """Command-line options of classify for the hand-picked exclusions of a pose."""
-    value = config["classify"]["exclude"].get(wildcards.pose)
-    if value is None:
-        return ""
-    if isinstance(value, str):
-        return f"--exclude-file {shlex.quote(value)}"
-    return "--exclude " + ",".join(str(int(i)) for i in value)
+    return exclude_options(config["classify"]["exclude"].get(wildcards.pose))
 
 
 def exclude_files(wildcards):
@@ -244,13 +187,7 @@ def repaired_file(pose):
 
 def pose_figure(figure):
     """The report() output of one figure of stage render (wildcard {pose}), caption rules/captions/<figure>.rst."""
-    return report(
-        f"{REPORTS}/figures/{{pose}}/{figure}.png",
-        caption=f"captions/{figure}.rst",
-        category="2. Poses",
-        subcategory="{pose}",
-        labels={"pose": "{pose}", "figure": POSE_FIGURES[figure]},
-    )
+    return report(**figure_report(REPORTS, figure, POSE_FIGURES[figure]))
 
 
 def _out_of_date(required):
@@ -265,64 +202,36 @@ def summary_inputs(pose):
             + list(baseline_artifacts(pose).values()) + [repaired_file(pose)])
 
 
-def _summary_poses():
-    """The poses of the library's summary, in library order: this run's, and those of the folder that an earlier
-    run finished and that are still up to date (a repair of some poses adds them to the summary rather than replacing
-    it; those are read as they are, not rerun)."""
-    if not config["poses"]:
-        return POSES
+def _earlier_finished():
+    """The poses outside this run's that an earlier run finished and that are still up to date (the summary's)."""
     earlier = {p.name: summary_inputs(p.name) for p in WHOLE_LIBRARY.poses if p.name not in POSES}
-    finished, _ = finished_poses(earlier, _out_of_date(earlier) if workflow.is_main_process else set())
-    return [p.name for p in WHOLE_LIBRARY.poses if p.name in POSES or p.name in finished]
+    return finished_poses(earlier, _out_of_date(earlier) if workflow.is_main_process else set())[0]
 
 
-SUMMARY_POSES = _summary_poses()
+SUMMARY_POSES = summary_poses(config["poses"] and POSES, [p.name for p in WHOLE_LIBRARY.poses],
+                              _earlier_finished() if config["poses"] else ())
 
 
 def repaired_containers():
-    """For a USD or glTF library: the container of each repair, results/<library>/repaired[-<baseline>]/<file name>
-    (rule pack); else none."""
-    if not LIBRARY.container:
-        return []
-    name = os.path.basename(LIBRARY.container)
-    return [f"{RESULTS}/repaired/{name}", *[f"{RESULTS}/repaired-{b}/{name}" for b in BASELINES]]
+    """For a container library: each repair's file, results/<library>/repaired[-<repair>]/<file name> (rule pack)."""
+    return repaired_container_files(RESULTS, LIBRARY.container, BASELINES)
 
 
 def get_final_output():
-    """The targets of the workflow: every repaired pose (and, for a USD or glTF library, the file of each repair),
-    the report figures, the summary, the overview and the 3D viewer."""
-    return [
-        *[repaired_file(p) for p in POSES],
-        *[baseline_repaired_file(b, p) for b in BASELINES for p in POSES],
-        *repaired_containers(),
-        *expand(f"{REPORTS}/figures/{{pose}}/{{figure}}.png", pose=POSES, figure=list(POSE_FIGURES)),
-        *expand(f"{REPORTS}/figures/{{pose}}/downstream.png", pose=POSES),
-        f"{REPORTS}/summary.json",
-        f"{REPORTS}/overview.png",
-        f"{REPORTS}/viewer.html",
-    ]
+    """The targets: each repair's mesh of every pose (and container file), and the report (plan.report_targets)."""
+    meshes = [repaired_file(p) for p in POSES] + [baseline_repaired_file(b, p) for b in BASELINES for p in POSES]
+    return [*meshes, *repaired_containers(), *report_targets(REPORTS, POSES, list(POSE_FIGURES))]
+
+
+def _finished(required):
+    """``(finished, unfinished)`` poses of ``required`` (pose -> files): all there, none out of date."""
+    return finished_poses(required, _out_of_date(required))
 
 
 def partial_summary(errors):
-    """After a failed run: the summary, overview and 3D viewer of the poses that finished, the others listed with
-    their error line (``errors``: the posefix error lines of the failed jobs); nothing when no pose finished."""
-    required = {p: summary_inputs(p) for p in SUMMARY_POSES}
-    finished, unfinished = finished_poses(required, _out_of_date(required))
-    if not finished or not unfinished:
-        return
-    failed = [f"--failed={pose}={line}" for pose, line in pose_errors(unfinished, errors).items()]
-    summary = [sys.executable, stage_script("summary"), "--results", RESULTS, "--poses", ",".join(finished),
-               "--baselines", ",".join(BASELINES), "--distortion-limit", str(config["summary"]["distortion_limit"]),
-               *failed, "--out", f"{REPORTS}/summary.json", "--markdown", f"{REPORTS}/summary.md",
-               "--log", f"{RESULTS}/logs/partial-summary.log"]
-    overview = [sys.executable, stage_script("overview"), "--summary", f"{REPORTS}/summary.json",
-                "--png", f"{REPORTS}/overview.png", "--html", f"{REPORTS}/summary.html",
-                "--log", f"{RESULTS}/logs/partial-overview.log"]
-    viewer = [sys.executable, stage_script("viewer"), "--summary", f"{REPORTS}/summary.json", "--results", RESULTS,
-              "--out", f"{REPORTS}/viewer.html", "--log", f"{RESULTS}/logs/partial-viewer.log"]
-    if all(stage_finished(stage) for stage in (summary, overview, viewer)):
-        print(f"posefix: summary of the {len(finished)} poses that finished, {len(unfinished)} listed as failed: "
-              f"{REPORTS}/summary.html", file=sys.stderr)
+    """After a failed run: the report of the poses that finished, the others listed with their error line."""
+    poses = _finished({p: summary_inputs(p) for p in SUMMARY_POSES})
+    partial_report(stage_script, (RESULTS, REPORTS), poses, errors, (BASELINES, config["summary"]["distortion_limit"]))
 
 
 def container_flags():
@@ -331,17 +240,7 @@ def container_flags():
 
 
 def partial_containers():
-    """After a failed run of a USD or glTF library: the file of each repair with the poses that finished repaired
-    and the others as in the input (stage pack), so that one bad pose does not hold back the others."""
-    for repair in ["repaired", *[f"repaired-{b}" for b in BASELINES]] if LIBRARY.container else ():
-        required = {p: [f"{RESULTS}/{repair}/{p}.ply"] for p in SUMMARY_POSES}
-        done, _ = finished_poses(required, _out_of_date(required))
-        out = f"{RESULTS}/{repair}/{os.path.basename(LIBRARY.container)}"
-        if not done or len(done) == len(SUMMARY_POSES):
-            continue
-        command = [sys.executable, stage_script("pack"), "--container", LIBRARY.container, "--mesh", LIBRARY.mesh,
-                   "--repaired", f"{RESULTS}/{repair}", "--poses", ",".join(done), "--out", out,
-                   "--log", f"{RESULTS}/logs/partial-pack-{repair}.log"]
-        if stage_finished(command):
-            print(f"posefix: {out}: {len(done)} of {len(SUMMARY_POSES)} poses repaired, the others as in the input",
-                  file=sys.stderr)
+    """After a failed run of a container library: each repair's file, with the poses that finished repaired."""
+    for folder in repair_folders(RESULTS, BASELINES) if LIBRARY.container else ():
+        done = _finished({p: [f"{folder}/{p}.ply"] for p in SUMMARY_POSES})[0]
+        partial_pack(stage_script("pack"), LIBRARY, folder, done, len(SUMMARY_POSES))

@@ -87,3 +87,24 @@ def test_functions_are_short_with_few_parameters():
 def test_stages_do_not_manipulate_sys_path():
     for path in sorted((ROOT / "stages").glob("*.py")) + sorted((ROOT / "rules").glob("*.smk")):
         assert "sys.path" not in path.read_text(), path.name
+
+
+def _smk_defs(path):
+    """``(name, first line, lines)`` of each def of a Snakemake file: from its ``def`` line to its last non-blank
+    line (the body: the lines indented deeper)."""
+    lines = path.read_text().splitlines()
+    for i, line in enumerate(lines):
+        if line.lstrip().startswith("def "):
+            indent, end = len(line) - len(line.lstrip()), i + 1
+            while end < len(lines) and (not lines[end].strip() or len(lines[end]) - len(lines[end].lstrip()) > indent):
+                end += 1
+            while not lines[end - 1].strip():
+                end -= 1
+            yield line.split("def ", 1)[1].split("(", 1)[0], i + 1, end - i
+
+
+def test_the_snakemake_files_hold_no_def_longer_than_five_lines():
+    """The planning is Python in posefix.workflow (plan, partial_summary): the .smk files declare rules (issue 51)."""
+    long = [f"{path.name}:{line} {name}: {count} lines" for path in sorted((ROOT / "rules").glob("*.smk"))
+            + [ROOT / "Snakefile"] for name, line, count in _smk_defs(path) if count > 5]
+    assert not long, long

@@ -93,3 +93,54 @@ def stage_finished(command):
     print(f"posefix: warning: {Path(command[1]).stem} of the poses that finished failed too (see "
           f"{command[command.index('--log') + 1]})", file=sys.stderr)
     return False
+
+
+def partial_report(stage_script, folders, poses, errors, options):
+    """After a failed run: run the summary, overview and 3D viewer stages for the poses that finished, the others
+    listed with their error line; nothing when no pose or every pose finished.
+
+    Parameters
+    ----------
+    stage_script : callable
+        Stage name -> path of its script (``stages/<name>.py``).
+    folders : tuple of str
+        (results/<library>, reports/<library>).
+    poses : tuple of list
+        (finished, unfinished) pose names (:func:`finished_poses`).
+    errors : list of str
+        The posefix error lines of the failed jobs (:func:`pose_errors`).
+    options : tuple
+        (the repairs beside space-time (list of str), config ``summary.distortion_limit``).
+    """
+    (results, reports), (finished, unfinished), (repairs, limit) = folders, poses, options
+    if not finished or not unfinished:
+        return
+    failed = [f"--failed={pose}={line}" for pose, line in pose_errors(unfinished, errors).items()]
+    logs = f"{results}/logs"
+    commands = [
+        [sys.executable, stage_script("summary"), "--results", results, "--poses", ",".join(finished),
+         "--baselines", ",".join(repairs), "--distortion-limit", str(limit), *failed, "--out",
+         f"{reports}/summary.json", "--markdown", f"{reports}/summary.md", "--log", f"{logs}/partial-summary.log"],
+        [sys.executable, stage_script("overview"), "--summary", f"{reports}/summary.json", "--png",
+         f"{reports}/overview.png", "--html", f"{reports}/summary.html", "--log", f"{logs}/partial-overview.log"],
+        [sys.executable, stage_script("viewer"), "--summary", f"{reports}/summary.json", "--results", results,
+         "--out", f"{reports}/viewer.html", "--log", f"{logs}/partial-viewer.log"],
+    ]
+    if all(stage_finished(command) for command in commands):
+        print(f"posefix: summary of the {len(finished)} poses that finished, {len(unfinished)} listed as failed: "
+              f"{reports}/summary.html", file=sys.stderr)
+
+
+def partial_pack(script, library, folder, done, total):
+    """After a failed run of a container library: write the file of one repair (stage pack, its ``script``) with the
+    poses ``done`` (list of str) repaired and the others as in the input, so that one bad pose does not hold back
+    the others; nothing when none or all ``total`` poses are done. ``folder``: the repair's folder of meshes
+    (results/<library>/repaired[-<repair>]); ``library``: the posefix.io.library.Library."""
+    if not done or len(done) == total:
+        return
+    out = f"{folder}/{os.path.basename(library.container)}"
+    command = [sys.executable, script, "--container", library.container, "--mesh", library.mesh, "--repaired",
+               folder, "--poses", ",".join(done), "--out", out,
+               "--log", f"{os.path.dirname(folder)}/logs/partial-pack-{os.path.basename(folder)}.log"]
+    if stage_finished(command):
+        print(f"posefix: {out}: {len(done)} of {total} poses repaired, the others as in the input", file=sys.stderr)
