@@ -11,7 +11,8 @@ with the downstream check towards every repair), S4's volumetric editing and tra
 (benchmarks/volumetric.py, which also runs alone) and S4's marker animation against the horse gallop
 (benchmarks/markers.py, which also runs alone) where the integrated field's V_C error comes from (benchmarks/accuracy.py, from the
 pipeline's results) and S0 at production sizes, one camel and one kids pose end to end (benchmarks/scale.py,
-which also runs alone), the downstream check's old vs new solver on lion-01 and camel-01 (benchmarks/downstream.py,
+which also runs alone), ipctk's broad phases on the contact solver's queries (benchmarks/broad_phase.py, which also
+runs alone), the downstream check's old vs new solver on lion-01 and camel-01 (benchmarks/downstream.py,
 which also runs alone), and USD and glTF libraries against folders of mesh files (benchmarks/containers.py, which
 also runs alone). Everything is collected into
 ``BENCHMARKS.md`` and ``BENCHMARKS.json`` (plus ``blocked_vs_full.png``) next to the per-library
@@ -210,6 +211,7 @@ def report(info, benchmarks, note, out):
         lines += (out / "markers.md").read_text().splitlines() + [""]
     lines += (out / "accuracy.md").read_text().splitlines() + [""]
     lines += (out / "scale.md").read_text().splitlines() + [""]
+    lines += (out / "broad-phase.md").read_text().splitlines() + [""]
     lines += (out / "downstream.md").read_text().splitlines() + [""]
     lines += (out / "containers.md").read_text().splitlines() + [""]
     return with_notes("\n".join(lines), "BENCHMARKS.md")
@@ -235,6 +237,7 @@ def main():
     run(sys.executable, ROOT / "benchmarks" / "markers.py", "--out", out, "--threads", args.cores)
     run(sys.executable, ROOT / "benchmarks" / "accuracy.py", "--out", out)
     run(sys.executable, ROOT / "benchmarks" / "scale.py", "--out", out, "--cores", args.cores)
+    run(sys.executable, ROOT / "benchmarks" / "broad_phase.py", "--out", out)
     run(sys.executable, ROOT / "benchmarks" / "downstream.py", "--out", out)  # lion-01, and camel-01 from scale.py
     run(sys.executable, ROOT / "benchmarks" / "containers.py", "--out", out, "--cores", args.cores)
     note += f" Wall time of the whole benchmark: {(time.perf_counter() - start) / 60:.1f} min."

@@ -283,6 +283,9 @@ class ContactSolver:
     def candidates(self, X0, X1=None, inflation=None):
         """The broad phase's primitive pairs near ``X0`` (or swept from ``X0`` to ``X1``), tolerated pairs removed.
 
+        ipctk's default broad phase, its LBVH: on lion, cat and kids-0001 its hash grids and sweep and prune took
+        3-10x its time for the same pairs (``benchmarks/broad_phase.py``, reports/bench/broad-phase.md).
+
         Parameters
         ----------
         X0, X1 : (n, 3) float
