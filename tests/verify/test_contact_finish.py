@@ -316,17 +316,35 @@ def test_a_free_region_pushed_out_of_shape_is_solved_again_from_the_other_start_
     assert cf._out_of_shape(problem, spiked, settings.rest_limit) and not cf._out_of_shape(problem, V, 3.0)
     first = ContactResult(spiked, True, 7, np.zeros(len(V), dtype=bool), np.inf, 0.0)
     weights = (border, locked, settings.constrained_weight)
-    result, label = cf._lower_energy_result(problem, solver, motion, (first, "tracked"), (V, "integrated"), weights,
-                                            settings.rest_limit)
+    result, label = cf._lower_energy_result(problem, solver, motion, (first, "tracked"), (V, "integrated"), weights)
     assert label == "integrated (second start)" and result.iterations >= 7
     np.testing.assert_allclose(result.X, V, atol=1e-9)
     clean = ContactResult(V.copy(), True, 1, np.zeros(len(V), dtype=bool), np.inf, 0.0)
     kept, label = cf._lower_energy_result(problem, solver, motion, (clean, "tracked"), (spiked, "integrated"),
-                                          weights, settings.rest_limit)
+                                          weights)
     assert label == "tracked" and np.array_equal(kept.X, V)
     crept = ContactResult(V.copy(), False, 400, np.zeros(len(V), dtype=bool), np.inf, 0.0)  # the lowest energy, 0
     bumped = V.copy()
     bumped[40, 2] += 0.01
     kept, label = cf._lower_energy_result(problem, solver, motion, (crept, "tracked"), (bumped, "integrated"),
-                                          weights, settings.rest_limit)
+                                          weights)
     assert label == "integrated (second start)" and kept.converged  # no severe face either way: converged first
+
+
+def test_the_second_solve_runs_only_where_the_first_result_would_not_make_the_pose_ok():
+    """A 9 x 9 sheet, its border V_C. Its centre raised so that its 6 faces are 2-4x the target's: ok (no second
+    solve, the status's limit being 4, where the rest limit of 2 ran one); raised more, beyond 4x: not ok; flat but
+    not converged: not ok."""
+    V, F = grid_sheet(9, 0.0)
+    border = (V[:, 0] % 1.0 == 0.0) | (V[:, 1] % 1.0 == 0.0)
+    problem = RepairProblem.build(V, V, F, border, [self_intersecting_pairs(V, F)] * 2)
+    none = np.zeros(len(V), dtype=bool)
+    around = np.isin(F, 40).any(axis=1)
+    for rise, ok in ((0.3, True), (0.5, False)):
+        X = V.copy()
+        X[40, 2] += rise
+        ratios = np.maximum(*face_distortion(X, V, F))[around]  # 2.6-3.5, then 4.1-5.7
+        assert (2.0 < ratios.min() and ratios.max() < 4.0) if ok else 4.0 < ratios.min() < 10.0
+        assert cf._out_of_shape(problem, X, FinishSettings().rest_limit)  # the old bound ran the second solve
+        assert cf._not_ok(problem, ContactResult(X, True, 9, none, np.inf, 0.0)) != ok
+    assert cf._not_ok(problem, ContactResult(V, False, 400, none, np.inf, 0.0))

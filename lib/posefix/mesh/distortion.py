@@ -8,6 +8,8 @@ import numpy as np
 
 from posefix.mesh.geometry import face_areas
 
+DISTORTION_LIMIT = 4.0
+"""Ratio beyond which a face counts as distorted by default (config ``summary.distortion_limit``: a pose's status)."""
 SEVERE = 10.0
 """Ratio beyond which a face is severely distorted (:func:`distortion_summary`'s ``faces_severe``)."""
 DISTORTED_SHARE = 1e-3
@@ -73,7 +75,7 @@ def distorted_faces(X, rests, F, limit):
     return over
 
 
-def distortion_summary(X, rests, F, limit=4.0, severe=SEVERE):
+def distortion_summary(X, rests, F, limit=DISTORTION_LIMIT, severe=SEVERE):
     """Worst ratios of ``X`` against each rest shape and the faces over ``limit`` against all of them.
 
     Parameters
