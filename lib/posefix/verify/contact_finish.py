@@ -211,7 +211,8 @@ def _solved(problem, solver, paths, motion, locked, settings):
     :data:`~posefix.mesh.distortion.DISTORTION_LIMIT` (:func:`_lower_energy_result`). At the rest state's bound
     instead (``rest_limit``, 2), the second solve ran on all of cat's 9 poses and 5 of lion's 9, where it runs on
     none now: verify took 407 s and 232 s for them, now 257 s and 176 s, with the same statuses; 31 faces beyond 4x
-    on cat instead of 27, and lion-01's worst edge ratio 4.96 instead of 2.91 (the contact repair's: 3.05)."""
+    on cat instead of 27, and lion-01's worst edge ratio against the nearer of target and reference 4.96 instead of
+    2.91 (the contact repair's against the target: 3.05)."""
     start, label, tracked, iterations, other = _start(problem, solver, paths, motion, locked, settings)
     heavy = problem.mask & ~locked
     start, pinned = _pinned(problem, solver, start, locked) if motion.elastic is not None else (start, None)
