@@ -10,7 +10,7 @@ from snakemake.utils import validate
 
 from posefix.workflow import demo
 from posefix.workflow.cli import config_flags, named_options, put_interpreter_first_on_path
-from posefix.workflow.command import failed_job_errors, recap_line
+from posefix.workflow.events import failed_job_errors, recap_line, record_events
 from posefix.workflow.partial_summary import finished_poses, partial_pack, partial_report, stale_files
 from posefix.workflow.plan import (exclude_options, exit_on_input_error, figure_report, library, memory_limit_mb,
                                    pose_list, read_reference_vertices, repair_folders, repaired_container_files,
@@ -31,6 +31,8 @@ _problems = config_problems(config, SCHEMA)
 if _problems:  # one line per problem, naming the key; no schema dump
     sys.exit("\n".join(f"posefix: error: config: {p}" for p in _problems))
 validate(config, "../schemas/config.schema.yaml")  # fills in the schema's defaults
+
+EVENTS = record_events()  # Snakemake's events of this run: the failed jobs' logs for onerror
 
 if workflow.is_main_process:  # not in the jobs a cluster executor starts: they cannot see the main process
     _stale = clear_stale_locks(".")

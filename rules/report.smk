@@ -129,8 +129,7 @@ rule viewer:
 
 
 onerror:  # the summary of the poses that finished (and a USD or glTF library's files with them), then the failed jobs' posefix error lines (plain snakemake too)
-    _text = "".join(Path(p).read_text(errors="replace") for p in (log if isinstance(log, list) else [log]) if p)
-    _errors = failed_job_errors(_text, Path.cwd())
+    _errors = failed_job_errors(EVENTS.events, Path.cwd())
     partial_summary(_errors)
     partial_containers()
     print("\n".join(map(recap_line, _errors)), file=sys.stderr)

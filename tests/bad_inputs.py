@@ -251,11 +251,11 @@ ENVIRONMENT = [
                f"posefix: error: config: {key}={key}: {key}/lib cannot be made: {{run}}/{key}/lib is a file",
                args=("repair", "{lib}"), make=_text(f"../{key}/lib", "")) for key in ("results", "reports")],
     BadInput("environment", ".snakemake a file in the folder run in",
-             "posefix: error: FileExistsError: [Errno 17] File exists: '.snakemake' (Snakemake stopped before any "
-             "stage; see its full output below)", args=("repair", "{lib}"), make=_text("../.snakemake", "")),
+             "posefix: error: FileExistsError: [Errno 17] File exists: '.snakemake'", args=("repair", "{lib}"),
+             make=_text("../.snakemake", "")),
     BadInput("environment", "XDG_CACHE_HOME where no folder can be made",
-             "posefix: error: FileNotFoundError: [Errno 2] No such file or directory: '/proc/posefix-cache' (Snakemake "
-             "stopped before any stage; see its full output below)", args=("repair", "{lib}"),
+             "posefix: error: FileNotFoundError: [Errno 2] No such file or directory: '/proc/posefix-cache'",
+             args=("repair", "{lib}"),
              env={"XDG_CACHE_HOME": "/proc/posefix-cache"}),
     BadInput("environment", "a folder to run in that takes no new folder",
              "posefix: error: /proc: the run's log folder posefix-logs cannot be made here (No such file or "

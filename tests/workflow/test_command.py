@@ -12,8 +12,8 @@ import numpy as np
 import pytest
 
 from conftest import h5_datasets, icosphere
-from posefix.workflow.command import (WORKFLOW, build_parser, failed_job_errors, failure_line, print_missed_errors,
-                                      recap_line, snakemake_command)
+from posefix.workflow.command import WORKFLOW, build_parser, print_missed_errors, shown, snakemake_command
+from posefix.workflow.events import failed_job_errors, failure_line, recap_line
 from posefix.io.errors import InputError
 from posefix.io.meshes import read_mesh, write_mesh
 
@@ -179,27 +179,34 @@ def test_the_report_of_a_library_repaired_under_another_name_goes_to_that_name(t
     assert report[-2:] == ["--report", "reports/walk-2/report.html"]
 
 
-@pytest.mark.parametrize("log, line", [
-    ("Building DAG of jobs...\nLockException:\nError: Directory cannot be locked.",
-     "posefix: error: {folder}: another Snakemake run is working in this folder; wait for it to finish (if none is "
-     "running: snakemake --unlock)"),
-    ("posefix fit: step 3\nOSError: [Errno 28] No space left on device: 'results/lion/lion-01/fit.h5'",
-     "posefix: error: no space left on device (OSError: [Errno 28] No space left on device: "
-     "'results/lion/lion-01/fit.h5'); free some disk, then run the same command again"),
-    ("PermissionError: [Errno 13] Permission denied: 'results/demo'",
-     "posefix: error: permission denied (PermissionError: [Errno 13] Permission denied: 'results/demo')"),
-    ("WildcardError in rule validate in file rules/library.smk, line 47:\nWildcards in input files cannot be "
-     "determined from output files: 'pose'", "posefix: error: WildcardError in rule validate in file "
-     "rules/library.smk, line 47: Wildcards in input files cannot be determined from output files: 'pose'"),
+@pytest.mark.parametrize("events, text, line", [
     # posefix report before a repair: the explanation is on the line after "WorkflowError:" (issue 50)
-    ("Building DAG of jobs...\nWorkflowError:\n\nFile reports/lib/figures/ball-01/renders.png marked for report but "
-     "does not exist.\n", "posefix: error: WorkflowError: File reports/lib/figures/ball-01/renders.png marked for "
-     "report but does not exist."),
-    ("Building DAG of jobs...\nsomething unexpected", "posefix: error: the run failed before any stage reported "
-                                                     "(see Snakemake's full output below)"),
+    ([{"event": "error", "exception": "WorkflowError", "msg": "WorkflowError:\n\nFile reports/lib/figures/ball-01/"
+                                                              "renders.png marked for report but does not exist.\n"}],
+     [], "posefix: error: WorkflowError: File reports/lib/figures/ball-01/renders.png marked for report but does not "
+         "exist."),
+    ([{"event": "error", "exception": "NotADirectoryError", "msg": 'NotADirectoryError in file "Snakefile", line 37:\n'
+                                                                   "[Errno 20] Not a directory: 'r/a'\n  File \"x\""}],
+     [], "posefix: error: NotADirectoryError: [Errno 20] Not a directory: 'r/a'"),
+    # the failed jobs' own error (a rule's exception) and the run's end are no cause in themselves
+    ([{"event": "error", "exception": "RuleException", "msg": "RuleException:\nCalledProcessError in file x"},
+      {"event": "error", "exception": "WorkflowError", "msg": "WorkflowError:\nAt least one job did not complete "
+                                                              "successfully."}],
+     [], "posefix: error: the run failed before any stage reported (see Snakemake's full output below)"),
+    # before Snakemake's logger starts: its text
+    ([], ["Using profile nope for setting default command line arguments.",
+          "Error: profile directory given (nope), but no profile.yaml (or config.yaml) found. Profile has to be given"],
+     "posefix: error: Snakemake: profile directory given (nope), but no profile.yaml (or config.yaml) found (a "
+     "--profile or SNAKEMAKE_PROFILE that names no profile)"),
 ])
-def test_a_run_that_fails_before_any_stage_reports_says_why_in_one_line(log, line):
-    assert failure_line(log, "/work/here") == line.format(folder="/work/here")
+def test_a_run_that_fails_before_any_stage_reports_says_why_in_one_line(events, text, line):
+    assert failure_line(events, "/work/here", text) == line
+
+
+def test_the_output_lines_shown_as_they_are():
+    assert shown("posefix: 3 of 9 jobs done\n") and shown("Nothing to be done (all requested files are present)")
+    assert shown("11:02:39 posefix fit: warning: 3 constraint points dropped\n")
+    assert not shown("11:02:39 posefix fit: read: 0.177 s\n") and not shown("Building DAG of jobs...\n")
 
 
 @pytest.mark.pipeline
@@ -213,32 +220,40 @@ def test_a_dry_run_shows_the_jobs_it_would_run(tmp_path):
     assert not (tmp_path / "results" / "lib" / "ball-01").exists()
 
 
+def job_error(rule, log):
+    """Snakemake's event for a failed job whose log is ``log``."""
+    return {"event": "job_error", "jobid": 1, "rule_name": rule, "log": [log]}
+
+
+LOCKED = [{"event": "error", "exception": "LockException", "msg": "LockException:\nError: Directory cannot be locked."}]
+
+
 def test_the_failed_jobs_error_lines_come_from_the_logs_snakemake_names(tmp_path):
     (tmp_path / "logs").mkdir()
     (tmp_path / "logs" / "fit.log").write_text("19:00:00 posefix fit: read\nTraceback...\n"
                                                "posefix fit: error: results/a/constraints.h5: too few\n")
     (tmp_path / "logs" / "validate.log").write_text("posefix validate: error: lib/b.obj: line 4\n")
-    log = ("Error in rule fit:\n    log: logs/fit.log (check log file(s) for error details)\n"
-           "Error in rule validate:\n    log: logs/validate.log (check log file(s) for error details)\n"
-           "Error in rule fit:\n    log: logs/fit.log (check log file(s) for error details)\n"
-           "Error in rule x:\n    log: logs/missing.log (check log file(s) for error details)\n")
-    assert failed_job_errors(log, tmp_path) == ["posefix fit: error: results/a/constraints.h5: too few",
-                                                "posefix validate: error: lib/b.obj: line 4"]
-    assert failed_job_errors("LockException", tmp_path) == [failure_line("LockException", tmp_path)]
+    events = [job_error("fit", "logs/fit.log"), job_error("validate", "logs/validate.log"),
+              job_error("fit", "logs/fit.log"), job_error("x", "logs/missing.log")]
+    assert failed_job_errors(events, tmp_path) == ["posefix fit: error: results/a/constraints.h5: too few",
+                                                   "posefix validate: error: lib/b.obj: line 4"]
+    assert failed_job_errors(LOCKED, tmp_path) == [failure_line(LOCKED, tmp_path)]
 
 
 def test_a_jobs_error_line_that_the_output_did_not_show_is_printed_from_its_log(tmp_path, monkeypatch, capsys):
     monkeypatch.chdir(tmp_path)
     (tmp_path / "logs").mkdir()
     (tmp_path / "logs" / "unpack.log").write_text("posefix unpack: error: ball.usda: frame 2: NaN\n")
-    log = "Error in rule unpack:\n    log: logs/unpack.log (check log file(s) for error details)\n"
-    print_missed_errors(["posefix: 3 of 9 jobs doposefix unpack: error: ball.usd\n"], log)  # a broken line
+    events = [job_error("unpack", "logs/unpack.log")]
+    print_missed_errors(["posefix: 3 of 9 jobs doposefix unpack: error: ball.usd\n"], events, [])  # a broken line
     assert capsys.readouterr().err.splitlines() == ["posefix unpack: error: ball.usda: frame 2: NaN"]
-    print_missed_errors(["posefix unpack: error: ball.usda: frame 2: NaN\n"], log)  # shown: not again
+    print_missed_errors(["posefix unpack: error: ball.usda: frame 2: NaN\n"], events, [])  # shown: not again
     assert capsys.readouterr().err == ""
-    print_missed_errors([], "LockException")  # no job's line: the run's
-    assert capsys.readouterr().err.splitlines() == [failure_line("LockException", tmp_path)]
-    print_missed_errors(["posefix validate: error: lib/b.obj: line 4\n"], "LockException")
+    print_missed_errors([], LOCKED, [])  # no job's line: the run's
+    assert capsys.readouterr().err.splitlines() == [failure_line(LOCKED, tmp_path)]
+    print_missed_errors([], [], ["Error: profile directory given (x), but no profile.yaml (or config.yaml) found."])
+    assert "profile directory given (x)" in capsys.readouterr().err
+    print_missed_errors(["posefix validate: error: lib/b.obj: line 4\n"], LOCKED, [])
     assert capsys.readouterr().err == ""
 
 

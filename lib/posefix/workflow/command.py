@@ -4,14 +4,15 @@
 (``results/``, ``reports/`` go there), ``posefix report LIBRARY`` writes the self-contained HTML report
 of a finished run. Snakemake's own output goes to ``posefix-logs/<time>.log``; the terminal shows the
 progress and the posefix lines, and a failed run ends with the posefix error lines of the stages (not
-Snakemake's traceback) and the log's path. Recovery after a hard kill needs nothing: the workflow
+Snakemake's traceback) and the log's path. The progress and the failed jobs come from Snakemake's events, which its
+logger plugin ``posefix`` writes to a pipe (:mod:`posefix.workflow.events`), not from its text. Recovery after a hard kill needs nothing: the workflow
 removes stale locks and its default profile reruns incomplete jobs.
 """
 
 import argparse
 import json
+import os
 import queue
-import re
 import signal
 import subprocess
 import sys
@@ -23,29 +24,16 @@ from posefix.io.containers import CONTAINER_SUFFIXES, container_format, containe
 from posefix.report.tables import entry_status
 from posefix import __version__
 from posefix.workflow.config_check import nested
+from posefix.workflow.events import failed_job_errors, failure_line
 from posefix.workflow.files import workflow_folder
 from posefix.workflow.progress import RunProgress
 
 WORKFLOW = workflow_folder()
 """The workflow's folder: Snakefile, rules, stages, profiles (in the wheel, or the checkout of ``pip install -e``)."""
 
-SHOWN = re.compile(r"^(posefix\b|Nothing to be done|This was a dry-run|[\d:]+ posefix [\w-]+: warning:)")
-"""Snakemake's output lines shown as they are (the progress: :class:`~posefix.workflow.progress.RunProgress`)."""
-
-FAILURES = (
-    (re.compile(r"LockException|Directory cannot be locked"),
-     "{folder}: another Snakemake run is working in this folder; wait for it to finish (if none is running: "
-     "snakemake --unlock)"),
-    (re.compile(r"(?P<cause>.*No space left on device.*)"),
-     "no space left on device ({cause}); free some disk, then run the same command again"),
-    (re.compile(r"(?P<cause>.*Permission denied.*)"), "permission denied ({cause})"),
-    (re.compile(r"(?P<cause>profile directory given \(.*\), but no profile.yaml \(or config.yaml\) found)"),
-     "Snakemake: {cause} (a --profile or SNAKEMAKE_PROFILE that names no profile)"),
-    (re.compile(r"^\s*(?P<cause>(WildcardError|MissingInputException|Missing input files|WorkflowError|"
-                r"SyntaxError|ValueError|KeyError)\b.*)"), "{cause}"),  # (not a traceback's "raise ValueError(")
-)
-"""Snakemake failures that precede or stop the jobs (no stage wrote a posefix line), as one line each: a pattern
-of the log and its message (``folder``: the run's folder; ``cause``: the matched log line)."""
+SHOWN = ("posefix", "Nothing to be done", "This was a dry-run")
+"""The starts of Snakemake's output lines shown as they are, besides the stages' warnings (:func:`shown`; the
+progress: :class:`~posefix.workflow.progress.RunProgress`)."""
 
 
 class _OneLineParser(argparse.ArgumentParser):
@@ -139,6 +127,11 @@ def profile_folder(profile):
     return shipped if shipped.is_dir() else Path(profile).resolve()
 
 
+def _is_key(text):
+    """Whether ``text`` is a config key, a name with dots between (``fit.batch``)."""
+    return not text.startswith(".") and text.replace(".", "_").isidentifier()
+
+
 def argument_problem(args):
     """What is wrong with parsed ``args`` before anything runs, one line (str), or None."""
     if not (WORKFLOW / "Snakefile").is_file():
@@ -148,7 +141,7 @@ def argument_problem(args):
             return f"{args.library}: not a folder, nor a USD, glTF or Alembic file ({', '.join(CONTAINER_SUFFIXES)})"
         if not Path(args.library).is_file():
             return f"{args.library}: no such file"
-    loose = [entry for entry in args.config if not re.match(r"[A-Za-z_][\w.]*=", entry)]
+    loose = [entry for entry in args.config if "=" not in entry or not _is_key(entry.partition("=")[0])]
     if loose and "=" in loose[0]:
         return f"--config {loose[0]}: the key before = is not a config key (KEY=VALUE, e.g. fit.batch=64)"
     if loose:  # --config takes every word after it: a library named after it is one
@@ -168,116 +161,90 @@ def argument_problem(args):
 
 
 def run(command, log_path, dry_run=False):
-    """Run ``command``, its output into ``log_path`` (line by line); onto stdout the progress
-    (:class:`~posefix.workflow.progress.RunProgress`; a dry run: Snakemake's table of the jobs) and the lines
-    :data:`SHOWN`, the posefix error lines once each onto stderr: the exit code and the error lines."""
-    errors, progress = [], RunProgress()
+    """Run ``command`` (Snakemake's, without its logger options: :func:`with_events` adds them), its output into
+    ``log_path`` (line by line); onto stdout the progress (:class:`~posefix.workflow.progress.RunProgress`, from
+    Snakemake's events; a dry run: Snakemake's table of the jobs) and the lines :func:`shown`, the posefix error lines
+    once each onto stderr: the exit code, the error lines and the events (list of dict)."""
+    errors, events, later, progress = [], [], [], RunProgress()
     log_path.parent.mkdir(parents=True, exist_ok=True)
+    read_end, write_end = os.pipe()
     with open(log_path, "w", encoding="utf-8", buffering=1) as log, subprocess.Popen(
-            command, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, errors="replace",
-            start_new_session=True) as child:
-        lines = queue.Queue()
-        threading.Thread(target=_pump, args=(child.stdout, lines), daemon=True).start()
+            with_events(command, write_end), stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+            errors="replace", start_new_session=True, pass_fds=(write_end,)) as child:
+        os.close(write_end)
+        items = queue.Queue()
+        for kind, stream in (("line", child.stdout), ("event", open(read_end, encoding="utf-8", errors="replace"))):
+            threading.Thread(target=_pump, args=(kind, stream, items), daemon=True).start()
         try:
-            table = False  # Snakemake's table of the jobs to run, from "Job stats:" to its "total" line
-            for line in iter(lambda: _next_line(lines, progress), None):
-                log.write(line)
-                table = dry_run and (table or line.startswith("Job stats:"))
-                error = line.startswith("posefix") and "error:" in line
-                if error and line not in errors:  # once, to stderr
-                    errors.append(line)
-                    print(line, end="", file=sys.stderr, flush=True)
-                elif not error and (table or SHOWN.match(line)):
-                    print(line, end="", flush=True)
-                elif not dry_run:
-                    _show(progress.feed(line))
-                table = table and not line.startswith("total")
-            return child.wait(), errors
+            for kind, item in _items(items, progress):
+                if kind == "event":
+                    events.append(item)
+                    _show(_event_lines(item, progress, dry_run))
+                    continue
+                log.write(item)
+                error = item.startswith("posefix") and "error:" in item
+                if error and item not in errors:  # once, to stderr
+                    errors.append(item)
+                    print(item, end="", file=sys.stderr, flush=True)
+                elif not error and shown(item):
+                    (later.append if dry_run else print)(item.rstrip("\n"))
+            _show(later)  # a dry run's lines after its table of the jobs (an event: the two streams interleave)
+            return child.wait(), errors, events
         except KeyboardInterrupt:  # Ctrl-C: stop Snakemake and its jobs, quietly
             child.send_signal(signal.SIGINT)
             child.wait()
-            return 130, errors
+            return 130, errors, events
 
 
-def _pump(stream, lines):
-    """Put the lines of ``stream`` into the queue ``lines``, then None."""
-    for line in stream:
-        lines.put(line)
-    lines.put(None)
+def with_events(command, fd):
+    """Snakemake's ``command`` (list of str) with the logger plugin ``posefix`` writing its events to the file
+    descriptor ``fd`` (int)."""
+    return [*command, "--logger", "posefix", "--logger-posefix-events", f"/dev/fd/{fd}"]
 
 
-def _next_line(lines, progress):
-    """The next line of Snakemake's output from the queue ``lines`` (None at its end); while none comes, what
+def shown(line):
+    """Whether Snakemake's output ``line`` (str) is shown as it is: it starts with one of :data:`SHOWN`, or it is a
+    stage's warning (``12:00:01 posefix fit: warning: ...``)."""
+    words = line.split(" ", 3)
+    return line.startswith(SHOWN) or (len(words) == 4 and words[1] == "posefix" and words[3].startswith("warning:"))
+
+
+def _event_lines(event, progress, dry_run):
+    """The lines to show for Snakemake's ``event`` (dict): a dry run's table of the jobs, else the progress."""
+    if dry_run:
+        return [event["msg"].rstrip("\n")] if event["event"] == "run_info" and "msg" in event else []
+    return progress.feed(event)
+
+
+def _pump(kind, stream, items):
+    """Put ``(kind, line)`` for the lines of ``stream`` (the events parsed) into the queue ``items``, then None."""
+    with stream:
+        for line in stream:
+            try:
+                items.put((kind, json.loads(line) if kind == "event" else line))
+            except ValueError:  # (never expected: the plugin writes whole lines)
+                continue
+    items.put(None)
+
+
+def _items(items, progress):
+    """The ``(kind, item)`` pairs of the queue ``items`` until both streams ended; while none comes, what
     ``progress`` says of the jobs running."""
-    while True:
+    streams = 2
+    while streams:
         try:
-            return lines.get(timeout=5.0)
+            item = items.get(timeout=5.0)
         except queue.Empty:
             _show(progress.idle())
+            continue
+        streams -= item is None
+        if item is not None:
+            yield item
 
 
 def _show(lines):
     for line in lines:
         print(line, flush=True)
-
-
-def failure_line(log_text, folder):
-    """The one-line cause of a run that failed with no posefix error line, from Snakemake's log (str)."""
-    lines = log_text.splitlines()
-    for pattern, message in FAILURES:
-        for k, line in enumerate(lines):
-            match = pattern.search(line)
-            if match:
-                cause = match.groupdict().get("cause", "").strip()
-                if cause.endswith(":"):  # "WorkflowError:", the explanation on the next line that says something
-                    cause = " ".join([cause, *[text.strip() for text in lines[k + 1:] if text.strip()][:1]])
-                return "posefix: error: " + message.format(folder=folder, cause=cause[:300])
-    raised = _last_exception(lines)
-    if raised:
-        return f"posefix: error: {raised[:300]} (Snakemake stopped before any stage; see its full output below)"
-    return "posefix: error: the run failed before any stage reported (see Snakemake's full output below)"
-
-
-def _last_exception(lines):
-    """The last exception a traceback in ``lines`` (list of str) names, as ``Name: message`` (Snakemake writes
-    ``Name in file F, line N:`` with the message on the next line), or None.
-
-    Examples
-    --------
-    >>> _last_exception(["Traceback ...", '  File "x.py"', "NotADirectoryError: [Errno 20] Not a directory: 'r/a'"])
-    "NotADirectoryError: [Errno 20] Not a directory: 'r/a'"
-    >>> _last_exception(['FileExistsError in file "Snakefile", line 37:', "[Errno 17] File exists: '.snakemake'"])
-    "FileExistsError: [Errno 17] File exists: '.snakemake'"
-    """
-    for k in range(len(lines) - 1, -1, -1):
-        match = re.match(r"(?P<name>[A-Z]\w*(Error|Exception))(?P<rest>: .*| in file .*:)?$", lines[k].strip())
-        if match and (match.group("rest") or "").startswith(" in file"):
-            following = [text.strip() for text in lines[k + 1:] if text.strip()][:1]
-            return ": ".join([match.group("name"), *following])
-        if match:
-            return match.group("name") + (match.group("rest") or "")
-    return None
-
-
-def failed_job_errors(log_text, folder):
-    """The posefix error lines of the jobs that failed, from Snakemake's log (str) and the jobs' log files that it
-    names (relative to ``folder``), once each in order; ``[`` :func:`failure_line` ``]`` when there are none."""
-    lines = []
-    for path in re.findall(r"log: (.+?) \(check log file\(s\) for error details\)", log_text):
-        for candidate in path.split(", "):
-            try:
-                text = (Path(folder) / candidate).read_text(errors="replace")
-            except OSError:
-                continue
-            lines += [line for line in text.splitlines() if re.match(r"posefix [\w-]+: error:", line)]
-    return list(dict.fromkeys(lines)) or [failure_line(log_text, folder)]
-
-
-def recap_line(line):
-    """A failed job's posefix error line as the run's recap shows it at the end (``posefix validate: error: X`` ->
-    ``posefix: failed in validate: X``): the error itself stays the one line that says ``error:``."""
-    match = re.match(r"posefix ([\w-]+): error: (.*)", line)
-    return f"posefix: failed in {match.group(1)}: {match.group(2)}" if match else line
 
 
 def finished_lines(reports, results, most=10, container=None):
@@ -305,13 +272,17 @@ def finished_lines(reports, results, most=10, container=None):
     return lines + [f"posefix: {what}: {path}" for what, path in pages if path.exists()]
 
 
-def print_missed_errors(shown, log_text):
-    """Print to stderr the failed jobs' error lines (:func:`failed_job_errors`, from their log files) that the run's
-    output did not show (``shown``: the lines it did): two jobs writing at once can break a line of Snakemake's
-    merged output (a test saw it on a loaded machine), their log files cannot. Where no job left one, the run's
-    :func:`failure_line`, unless the output showed an error line."""
+def print_missed_errors(shown, events, text):
+    """Print to stderr the failed jobs' error lines (:func:`~posefix.workflow.events.failed_job_errors`, from their
+    log files, which Snakemake's ``events`` name) that the run's output did not show (``shown``: the lines it did):
+    two jobs writing at once can break a line of Snakemake's merged output (a test saw it on a loaded machine), their
+    log files cannot. Where no job left one, the run's :func:`~posefix.workflow.events.failure_line` (from the events,
+    else Snakemake's ``text``, list of str), unless the output showed an error line."""
     shown = {line.rstrip("\n") for line in shown}
-    for line in failed_job_errors(log_text, Path.cwd()):
+    lines = failed_job_errors(events, Path.cwd())
+    if lines == [failure_line(events, Path.cwd())]:
+        lines = [failure_line(events, Path.cwd(), text)]
+    for line in lines:
         if line not in shown and (not shown or not line.startswith("posefix: ")):
             print(line, file=sys.stderr)
 
@@ -327,7 +298,7 @@ def main(argv=None):
     except OSError as exc:
         sys.exit(f"posefix: error: {Path.cwd()}: the run's log folder {log_path.parent} cannot be made here "
                  f"({exc.strerror}); run posefix in a folder you can write")
-    code, errors = run(snakemake_command(args), log_path, dry_run=args.command == "repair" and args.dry_run)
+    code, errors, events = run(snakemake_command(args), log_path, dry_run=args.command == "repair" and args.dry_run)
     if code == 0 and args.command == "repair" and not args.dry_run:
         container = Path(args.library).name if args.library and container_format(args.library) else None
         print("\n".join(finished_lines(Path("reports") / library_name(args), Path("results") / library_name(args),
@@ -335,7 +306,7 @@ def main(argv=None):
     if code == 130:
         print("posefix: interrupted; run the same command again to go on", file=sys.stderr)
     elif code != 0:
-        print_missed_errors(errors, log_path.read_text(errors="replace"))
+        print_missed_errors(errors, events, log_path.read_text(errors="replace").splitlines())
         print(f"posefix: Snakemake's full output: {log_path}", file=sys.stderr)
     sys.exit(code)
 

@@ -23,8 +23,9 @@ from types import SimpleNamespace
 from posefix.io.containers import container_format
 from posefix.io.errors import PosefixError
 from posefix.report.tables import entry_status
-from posefix.workflow.command import failed_job_errors, library_name
+from posefix.workflow.command import library_name
 from posefix.workflow.config_check import nested
+from posefix.workflow.events import EventRecorder, failed_job_errors
 from posefix.workflow.files import workflow_folder
 
 log = logging.getLogger(__name__)
@@ -128,11 +129,12 @@ def _run(settings, out, cores, log_path):
     """Run the workflow in ``out`` with the config ``settings`` on ``cores``; its output into ``log_path``, the
     progress onto this module's logger; :class:`PosefixError` when it fails."""
     cwd, environment = Path.cwd(), dict(os.environ)  # the Snakefile sets PATH and POSEFIX_BLENDER: not the caller's
+    progress = _Progress()
     try:
         with open(log_path, "w", encoding="utf-8", buffering=1) as stream, _output_into(stream):
-            _execute(settings, out, cores)
+            _execute(settings, out, cores, progress)
     except (Exception, SystemExit) as exc:  # noqa: BLE001 (Snakemake's and the Snakefile's sys.exit alike)
-        raise PosefixError(_failure(exc, log_path, out)) from None
+        raise PosefixError(_failure(exc, progress.events, out)) from None
     finally:
         os.chdir(cwd)
         os.environ.clear()
@@ -177,15 +179,14 @@ def _handlers(logger):
     return out
 
 
-def _execute(settings, out, cores):
+def _execute(settings, out, cores, handler):
     """The workflow's run through Snakemake's API, with the workflow profile's settings (rerun-incomplete,
-    keep-going: ``profiles/default``)."""
+    keep-going: ``profiles/default``), its events into ``handler`` (:class:`_Progress`)."""
     from snakemake.api import SnakemakeApi
     from snakemake.settings.types import (ConfigSettings, DAGSettings, ExecutionSettings, OutputSettings,
                                           ResourceSettings)
 
     with SnakemakeApi(OutputSettings()) as api:
-        handler = _Progress()
         logging.getLogger("snakemake").addHandler(handler)
         try:
             workflow = api.workflow(resource_settings=ResourceSettings(cores=cores),
@@ -197,21 +198,22 @@ def _execute(settings, out, cores):
             logging.getLogger("snakemake").removeHandler(handler)
 
 
-class _Progress(logging.Handler):
-    """Snakemake's progress events as ``posefix.workflow.library_repair`` lines: ``3 of 17 steps done``."""
+class _Progress(EventRecorder):
+    """Snakemake's events, kept (:class:`~posefix.workflow.events.EventRecorder`), its progress as
+    ``posefix.workflow.library_repair`` lines: ``3 of 17 steps done``."""
 
     def emit(self, record):
+        super().emit(record)
         if str(getattr(record, "event", "")) == "progress":
             log.info("%d of %d steps done", record.done, record.total)
 
 
-def _failure(exc, log_path, out):
-    """The one line of a failed run: the first failed job's posefix error, the Snakefile's refusal, or the
-    exception's first line (str)."""
+def _failure(exc, events, out):
+    """The one line of a failed run: the first failed job's posefix error (Snakemake's ``events``, list of dict, name
+    their logs), the Snakefile's refusal, or the exception's first line (str)."""
     if isinstance(exc, SystemExit) and isinstance(exc.code, str):
         return exc.code.splitlines()[0].removeprefix("posefix: error: ")
-    text = log_path.read_text(errors="replace") if log_path.is_file() else ""
-    lines = failed_job_errors(text, out)
+    lines = failed_job_errors(events, out)
     first = lines[0].split("error: ", 1)[-1] if lines else ""
     return first or (str(exc).strip().splitlines() or [type(exc).__name__])[0]
 

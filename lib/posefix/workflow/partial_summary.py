@@ -7,7 +7,6 @@ Snakemake runs the summary only when every pose has finished; after a failed run
 
 import json
 import os
-import re
 import subprocess
 import sys
 import tempfile
@@ -80,8 +79,19 @@ def pose_errors(poses, error_lines):
 
 def _first_naming(pose, lines):
     """The first of ``lines`` that names the file or results folder of ``pose``, else that it did not finish."""
-    named = re.compile(rf"(^|[/\\\s]){re.escape(pose)}[./\\]")
-    return next((line for line in lines if named.search(line)), "did not finish (see the log)")
+    return next((line for line in lines if _names(line, pose)), "did not finish (see the log)")
+
+
+def _names(line, pose):
+    """Whether ``line`` (str) names ``pose`` as a file or folder: after its start, a slash or a space, before a dot or
+    a slash."""
+    start = line.find(pose)
+    while start >= 0:
+        after = line[start + len(pose):start + len(pose) + 1]
+        if (start == 0 or line[start - 1] in "/\\" or line[start - 1].isspace()) and after and after in "./\\":
+            return True
+        start = line.find(pose, start + 1)
+    return False
 
 
 def stage_finished(command):

@@ -1,38 +1,31 @@
-"""A run's progress in a few lines, from Snakemake's output: jobs done of the total at every tenth, and, while
-nothing finishes for a while, which stage runs on which pose and for how long.
+"""A run's progress in a few lines, from Snakemake's events (:mod:`posefix.workflow.events`): jobs done of the total
+at every tenth, and, while nothing finishes for a while, which stage runs on which pose and for how long.
 
-Snakemake prints a block per job it starts (``rule verify:`` or ``localrule verify:``, ``jobid: 35``,
-``wildcards: pose=lion-05``), ``Finished jobid: 35 (Rule: verify)`` and ``3 of 39 steps (8%) done`` when it ends,
-and a table of the jobs to run (``Job stats:`` ... ``total  39``). :class:`RunProgress` reads those lines and
-says what a user needs: ``posefix: 39 jobs to run`` once, ``posefix: 12 of 39 jobs done (31%); running: verify
-lion-05, fit lion-06`` when a tenth more is done, and the same with how long each has run (``verify lion-05 for
-3 min``) when nothing has been said for ``quiet`` seconds.
+Snakemake says how many jobs it will run (``run_info``, its ``stats``), which it starts (``job_info``: jobid, rule,
+wildcards), which end (``job_finished``, or ``job_error``) and how many are done (``progress``). :class:`RunProgress`
+reads those events and says what a user needs: ``posefix: 39 jobs to run`` once, ``posefix: 12 of 39 jobs done
+(31%); running: verify lion-05, fit lion-06`` when a tenth more is done, and the same with how long each has run
+(``verify lion-05 for 3 min``) when nothing has been said for ``quiet`` seconds.
 
 Examples
 --------
 >>> progress = RunProgress(clock=lambda: 0.0)
->>> progress.feed("total            10")
+>>> progress.feed({"event": "run_info", "stats": {"verify": 10, "total": 10}})
 ['posefix: 10 jobs to run']
->>> [progress.feed(line) for line in ("localrule verify:", "    jobid: 3", "    wildcards: pose=a")]
-[[], [], []]
->>> progress.feed("1 of 10 steps (10%) done")
+>>> progress.feed({"event": "job_info", "jobid": 3, "rule_name": "verify", "wildcards": {"pose": "a"}})
+[]
+>>> progress.feed({"event": "progress", "done": 1, "total": 10})
 ['posefix: 1 of 10 jobs done (10%); running: verify a']
 """
 
-import re
 import time
 
-_RULE = re.compile(r"^(?:local)?rule (\w+):$")
-_JOBID = re.compile(r"^\s+jobid: (\d+)$")
-_POSE = re.compile(r"^\s+wildcards: .*\b(?:pose|member)=([^,]+)")  # member: rule unpack's pose (or reference)
-_ERROR = re.compile(r"^Error in rule \w+:$")
-_FINISHED = re.compile(r"^Finished jobid: (\d+)")
-_STEPS = re.compile(r"^(\d+) of (\d+) steps \((\d+)%\) done")
-_TOTAL = re.compile(r"^total\s+(\d+)$")
+POSE_WILDCARDS = ("pose", "member")
+"""The wildcards that name a job's pose (``member``: rule unpack's pose, or the reference)."""
 
 
 class RunProgress:
-    """The progress lines of one Snakemake run, fed its output line by line.
+    """The progress lines of one Snakemake run, fed its events one by one.
 
     Parameters
     ----------
@@ -47,32 +40,24 @@ class RunProgress:
     def __init__(self, clock=time.monotonic, quiet=60.0, shown=3):
         self.clock, self.quiet, self.shown = clock, quiet, shown
         self.running = {}  # jobid -> [rule, pose or None, start seconds]
-        self._rule = self._job = None
-        self._error = False  # in an "Error in rule" block: its jobid is a job that has ended
         self._tenth, self._done = 0, (0, 0, 0)
         self._said = clock()
 
-    def feed(self, line):
-        """The progress lines (list of str) that Snakemake's output ``line`` calls for."""
-        line = line.rstrip("\n")
-        rule, job, pose = _RULE.match(line), _JOBID.match(line), _POSE.match(line)
-        finished, steps, total = _FINISHED.match(line), _STEPS.match(line), _TOTAL.match(line)
-        if rule or _ERROR.match(line):
-            self._rule, self._error = (rule.group(1), False) if rule else (None, True)
-        elif job and self._error:
-            self.running.pop(int(job.group(1)), None)
-            self._error = False
-        elif job and self._rule:
-            self._job = int(job.group(1))
-            self.running[self._job] = [self._rule, None, self.clock()]
-        elif pose and self._job in self.running:
-            self.running[self._job][1] = pose.group(1).strip()
-        elif finished:
-            self.running.pop(int(finished.group(1)), None)
-        elif total:
-            return self._say(f"posefix: {total.group(1)} jobs to run")
-        elif steps:
-            self._done = done, count, percent = tuple(map(int, steps.groups()))
+    def feed(self, event):
+        """The progress lines (list of str) that Snakemake's ``event`` (dict, :func:`~posefix.workflow.events.
+        snakemake_event`) calls for."""
+        kind = event["event"]
+        if kind == "run_info" and "total" in event.get("stats", {}):
+            return self._say(f"posefix: {event['stats']['total']} jobs to run")
+        if kind == "job_info":
+            wildcards = event.get("wildcards", {})
+            pose = next((wildcards[name] for name in POSE_WILDCARDS if name in wildcards), None)
+            self.running[event["jobid"]] = [event["rule_name"], pose, self.clock()]
+        elif kind in ("job_finished", "job_error"):
+            self.running.pop(event.get("job_id", event.get("jobid")), None)
+        elif kind == "progress" and event.get("total"):
+            done, count = event["done"], event["total"]
+            self._done = done, count, percent = done, count, 100 * done // count
             if percent // 10 > self._tenth or done == count:
                 self._tenth = percent // 10
                 return self._say(f"posefix: {done} of {count} jobs done ({percent}%)" + self._running(False))
