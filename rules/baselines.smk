@@ -21,14 +21,10 @@ rule skeleton:
         script=stage_script("skeleton"),
         code=stage_code("skeleton"),
     threads: 1
-    resources:
-        mem_mb=memory_mb("skeleton"),
-    log:
-        f"{RESULTS}/logs/skeleton.log",
-    benchmark:
-        f"{RESULTS}/benchmarks/skeleton.tsv"
-    conda:
-        "../envs/posefix.yaml"
+    resources: mem_mb=memory_mb("skeleton")
+    log: log_file("skeleton", None)
+    benchmark: benchmark_file("skeleton", None)
+    conda: "../envs/posefix.yaml"
     shell:
         "python {params.script:q} --reference {input.reference:q} --out {output:q} {params.options}"
         " --threads {threads} --log {log:q}"
@@ -47,14 +43,10 @@ rule repair_medial:
         script=stage_script("repair_medial"),
         code=stage_code("repair_medial"),
     threads: MEDIAL["threads"]
-    resources:
-        mem_mb=memory_mb("repair_medial"),
-    log:
-        f"{RESULTS}/logs/{{pose}}/repair_medial.log",
-    benchmark:
-        f"{RESULTS}/benchmarks/{{pose}}/repair_medial.tsv"
-    conda:
-        "../envs/posefix.yaml"
+    resources: mem_mb=memory_mb("repair_medial")
+    log: log_file("repair_medial")
+    benchmark: benchmark_file("repair_medial")
+    conda: "../envs/posefix.yaml"
     shell:
         "python {params.script:q} --reference {input.reference:q} --target {input.target:q}"
         " --skeleton {input.skeleton:q} --out {output:q} {params.options} --threads {threads} --log {log:q}"
@@ -71,14 +63,10 @@ rule tet_mesh:
         script=stage_script("tet_mesh"),
         code=stage_code("tet_mesh"),
     threads: 1
-    resources:
-        mem_mb=memory_mb("tet_mesh"),
-    log:
-        f"{RESULTS}/logs/tet_mesh.log",
-    benchmark:
-        f"{RESULTS}/benchmarks/tet_mesh.tsv"
-    conda:
-        "../envs/posefix.yaml"
+    resources: mem_mb=memory_mb("tet_mesh")
+    log: log_file("tet_mesh", None)
+    benchmark: benchmark_file("tet_mesh", None)
+    conda: "../envs/posefix.yaml"
     shell:
         "python {params.script:q} --reference {input.reference:q} --out {output:q}"
         " {params.options} --threads {threads} --log {log:q}"
@@ -97,14 +85,10 @@ rule repair_volumetric:
         script=stage_script("repair_volumetric"),
         code=stage_code("repair_volumetric"),
     threads: FILL["threads"]
-    resources:
-        mem_mb=memory_mb("repair_volumetric"),
-    log:
-        f"{RESULTS}/logs/{{pose}}/repair_volumetric.log",
-    benchmark:
-        f"{RESULTS}/benchmarks/{{pose}}/repair_volumetric.tsv"
-    conda:
-        "../envs/posefix.yaml"
+    resources: mem_mb=memory_mb("repair_volumetric")
+    log: log_file("repair_volumetric")
+    benchmark: benchmark_file("repair_volumetric")
+    conda: "../envs/posefix.yaml"
     shell:
         "python {params.script:q} --reference {input.reference:q} --target {input.target:q}"
         " --classify {input.classify:q} --tets {input.tets:q} --out {output:q} {params.options}"
@@ -122,14 +106,10 @@ rule repair_contact:
         script=stage_script("repair_contact"),
         code=stage_code("repair_contact"),
     threads: config["repair_contact"]["threads"]
-    resources:
-        mem_mb=memory_mb("repair_contact"),
-    log:
-        f"{RESULTS}/logs/{{pose}}/repair_contact.log",
-    benchmark:
-        f"{RESULTS}/benchmarks/{{pose}}/repair_contact.tsv"
-    conda:
-        "../envs/posefix.yaml"
+    resources: mem_mb=memory_mb("repair_contact")
+    log: log_file("repair_contact")
+    benchmark: benchmark_file("repair_contact")
+    conda: "../envs/posefix.yaml"
     shell:
         "python {params.script:q} --keyframes {input.keyframes:q} --classify {input.classify:q}"
         " --out {output:q} {params.options} --threads {threads} --log {log:q}"
@@ -149,14 +129,10 @@ rule export_baseline:
         script=stage_script("export"),
         code=stage_code("export"),
     threads: 1
-    resources:
-        mem_mb=memory_mb("export_baseline"),
-    log:
-        f"{RESULTS}/logs/{{pose}}/export_{{baseline}}{{suffix}}.log",
-    benchmark:
-        f"{RESULTS}/benchmarks/{{pose}}/export_{{baseline}}{{suffix}}.tsv"
-    conda:
-        "../envs/posefix.yaml"
+    resources: mem_mb=memory_mb("export_baseline")
+    log: log_file("export_{baseline}{suffix}")
+    benchmark: benchmark_file("export_{baseline}{suffix}")
+    conda: "../envs/posefix.yaml"
     shell:
         "python {params.script:q} --artifact {input.artifact:q} --stage repair_{wildcards.baseline}"
         " --reference {input.reference:q} --target {input.target:q} --out {output:q} --log {log:q}"

@@ -12,9 +12,9 @@ from posefix.workflow import demo
 from posefix.workflow.cli import config_flags, named_options, put_interpreter_first_on_path
 from posefix.workflow.events import failed_job_errors, recap_line, record_events
 from posefix.workflow.partial_summary import finished_poses, partial_pack, partial_report, stale_files
-from posefix.workflow.plan import (exclude_options, exit_on_input_error, figure_report, library, memory_limit_mb,
-                                   pose_list, read_reference_vertices, repair_folders, repaired_container_files,
-                                   report_targets, summary_poses)
+from posefix.workflow.plan import (exclude_options, exit_on_input_error, figure_report, job_files, library,
+                                   memory_limit_mb, pose_list, read_reference_vertices, repair_folders,
+                                   repaired_container_files, report_targets, summary_poses)
 from posefix.workflow.config_check import config_problems, folder_problems, typed_by_schema
 from posefix.workflow.files import package_folder
 from posefix.workflow.fingerprint import CodeFingerprints
@@ -86,6 +86,16 @@ def stage_code(name):
     code reruns the stage and what depends on it, and nothing else). Each file is read once per run; the jobs
     find the run's fingerprints in .snakemake/posefix-code.json (the Snakefile saves it)."""
     return CODE.fingerprint(stage_script(name))
+
+
+def log_file(job, wildcard="pose", folder=None):
+    """The log file of a rule's job in ``folder`` (the library's results by default): posefix.workflow.plan.job_files."""
+    return job_files(folder or RESULTS, job, wildcard)[0]
+
+
+def benchmark_file(job, wildcard="pose", folder=None):
+    """The benchmark file of a rule's job (:func:`log_file`'s twin)."""
+    return job_files(folder or RESULTS, job, wildcard)[1]
 
 
 def _library(wanted):

@@ -22,14 +22,10 @@ if LIBRARY.container:
             script=stage_script("unpack"),
             code=stage_code("unpack"),
         threads: 1
-        resources:
-            mem_mb=memory_mb("unpack"),
-        log:
-            f"{RESULTS}/logs/{{member}}/unpack.log",
-        benchmark:
-            f"{RESULTS}/benchmarks/{{member}}/unpack.tsv"
-        conda:
-            "../envs/posefix.yaml"
+        resources: mem_mb=memory_mb("unpack")
+        log: log_file("unpack", "member")
+        benchmark: benchmark_file("unpack", "member")
+        conda: "../envs/posefix.yaml"
         shell:
             "python {params.script:q} {params.container} --pose {wildcards.member:q} {params.reference}"
             " --out {output:q} --log {log:q}"
@@ -50,14 +46,10 @@ if LIBRARY.container:
             script=stage_script("pack"),
             code=stage_code("pack"),
         threads: 1
-        resources:
-            mem_mb=memory_mb("pack"),
-        log:
-            f"{RESULTS}/logs/pack-{{repair}}.log",
-        benchmark:
-            f"{RESULTS}/benchmarks/pack-{{repair}}.tsv"
-        conda:
-            "../envs/posefix.yaml"
+        resources: mem_mb=memory_mb("pack")
+        log: log_file("pack-{repair}", None)
+        benchmark: benchmark_file("pack-{repair}", None)
+        conda: "../envs/posefix.yaml"
         shell:
             "python {params.script:q} {params.container} --repaired {params.folder:q} --poses {params.poses:q}"
             " --out {output:q} --log {log:q}"

@@ -28,14 +28,10 @@ rule downstream:
         script=stage_script("downstream"),
         code=stage_code("downstream"),
     threads: config["downstream"]["threads"]
-    resources:
-        mem_mb=memory_mb("downstream"),
-    log:
-        f"{RESULTS}/logs/{{pose}}/downstream.log",
-    benchmark:
-        f"{RESULTS}/benchmarks/{{pose}}/downstream.tsv"
-    conda:
-        "../envs/posefix.yaml"
+    resources: mem_mb=memory_mb("downstream")
+    log: log_file("downstream")
+    benchmark: benchmark_file("downstream")
+    conda: "../envs/posefix.yaml"
     shell:
         "python {params.script:q} --keyframes {input.keyframes:q} --verify {input.verify:q}"
         " {params.options} {params.baselines} --threads {threads} --out {output.h5:q} --png {output.png:q} --pose {wildcards.pose:q}"

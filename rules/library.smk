@@ -10,14 +10,10 @@ rule demo:
         script=stage_script("demo"),
         code=stage_code("demo"),
     threads: 1
-    resources:
-        mem_mb=memory_mb("demo"),
-    log:
-        f"{RESULTS}/logs/demo.log",
-    benchmark:
-        f"{RESULTS}/benchmarks/demo.tsv"
-    conda:
-        "../envs/posefix.yaml"
+    resources: mem_mb=memory_mb("demo")
+    log: log_file("demo", None)
+    benchmark: benchmark_file("demo", None)
+    conda: "../envs/posefix.yaml"
     shell:
         "python {params.script:q} --out {params.folder:q} {params.options}"
         " --log {log:q}"
@@ -35,14 +31,10 @@ rule validate_reference:
         script=stage_script("validate"),
         code=stage_code("validate"),
     threads: 1
-    resources:
-        mem_mb=memory_mb("validate_reference"),
-    log:
-        f"{RESULTS}/logs/validate_reference.log",
-    benchmark:
-        f"{RESULTS}/benchmarks/validate_reference.tsv"
-    conda:
-        "../envs/posefix.yaml"
+    resources: mem_mb=memory_mb("validate_reference")
+    log: log_file("validate_reference", None)
+    benchmark: benchmark_file("validate_reference", None)
+    conda: "../envs/posefix.yaml"
     shell:
         "python {params.script:q} --library {params.folder:q} --reference {params.reference:q}"
         " --reference-only --name {params.name:q} --out {output:q} --log {log:q}"
@@ -62,14 +54,10 @@ rule validate:
         script=stage_script("validate"),
         code=stage_code("validate"),
     threads: 1
-    resources:
-        mem_mb=memory_mb("validate"),
-    log:
-        f"{RESULTS}/logs/{{pose}}/validate.log",
-    benchmark:
-        f"{RESULTS}/benchmarks/{{pose}}/validate.tsv"
-    conda:
-        "../envs/posefix.yaml"
+    resources: mem_mb=memory_mb("validate")
+    log: log_file("validate")
+    benchmark: benchmark_file("validate")
+    conda: "../envs/posefix.yaml"
     shell:
         "python {params.script:q} --library {params.folder:q} --reference {params.reference:q}"
         " --poses {wildcards.pose:q} --name {params.name:q} --out {output:q} --log {log:q}"

@@ -21,12 +21,9 @@ rule summary:
         script=stage_script("summary"),
         code=stage_code("summary"),
     threads: 1
-    resources:
-        mem_mb=memory_mb("summary"),
-    log:
-        f"{RESULTS}/logs/summary.log",
-    conda:
-        "../envs/posefix.yaml"
+    resources: mem_mb=memory_mb("summary")
+    log: log_file("summary", None)
+    conda: "../envs/posefix.yaml"
     shell:
         "python {params.script:q} --results {params.results:q} --poses {params.poses:q}"
         " {params.baselines} --distortion-limit {params.limit} --out {output.json:q} --markdown {output.md:q}"
@@ -51,14 +48,10 @@ rule render:
         script=stage_script("render"),
         code=stage_code("render"),
     threads: 1
-    resources:
-        mem_mb=memory_mb("render"),
-    log:
-        f"{RESULTS}/logs/{{pose}}/render.log",
-    benchmark:
-        f"{RESULTS}/benchmarks/{{pose}}/render.tsv"
-    conda:
-        "../envs/posefix.yaml"
+    resources: mem_mb=memory_mb("render")
+    log: log_file("render")
+    benchmark: benchmark_file("render")
+    conda: "../envs/posefix.yaml"
     shell:
         "python {params.script:q} --keyframes {input.keyframes:q} --classify {input.classify:q}"
         " --fit {input.fit:q} --verify {input.verify:q} --benchmarks {params.benchmarks:q}"
@@ -86,12 +79,9 @@ rule overview:
         script=stage_script("overview"),
         code=stage_code("overview"),
     threads: 1
-    resources:
-        mem_mb=memory_mb("overview"),
-    log:
-        f"{RESULTS}/logs/overview.log",
-    conda:
-        "../envs/posefix.yaml"
+    resources: mem_mb=memory_mb("overview")
+    log: log_file("overview", None)
+    conda: "../envs/posefix.yaml"
     shell:
         "python {params.script:q} --summary {input:q} --png {output.png:q} --html {output.html:q}"
         " --log {log:q}"
@@ -117,12 +107,9 @@ rule viewer:
         script=stage_script("viewer"),
         code=stage_code("viewer"),
     threads: 1
-    resources:
-        mem_mb=memory_mb("viewer"),
-    log:
-        f"{RESULTS}/logs/viewer.log",
-    conda:
-        "../envs/posefix.yaml"
+    resources: mem_mb=memory_mb("viewer")
+    log: log_file("viewer", None)
+    conda: "../envs/posefix.yaml"
     shell:
         "python {params.script:q} --summary {input.summary:q} --results {params.results:q} --out {output:q}"
         " --log {log:q}"

@@ -22,12 +22,9 @@ rule skeletal_pose:
         name=AUTHOR_NAME,
         options=config_flags(AUTHOR, skip=("threads", "rig", "mesh", "out")),
     threads: AUTHOR["threads"]
-    log:
-        f"{AUTHORED}/skeletal_pose.log",
-    benchmark:
-        f"{AUTHORED}/skeletal_pose.tsv"
-    conda:
-        "../envs/posefix.yaml"
+    log: log_file("skeletal_pose", "", AUTHORED)
+    benchmark: benchmark_file("skeletal_pose", "", AUTHORED)
+    conda: "../envs/posefix.yaml"
     shell:
         "python {params.script:q} --mesh {input.mesh:q} --rig {input.rig:q} --out {output.library:q}"
         " --artifact {output.artifact:q} --name {params.name:q} {params.options} --threads {threads} --log {log:q}"

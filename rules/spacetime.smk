@@ -13,14 +13,10 @@ rule keyframes:
         script=stage_script("keyframes"),
         code=stage_code("keyframes"),
     threads: config["keyframes"]["threads"]
-    resources:
-        mem_mb=memory_mb("keyframes"),
-    log:
-        f"{RESULTS}/logs/{{pose}}/keyframes.log",
-    benchmark:
-        f"{RESULTS}/benchmarks/{{pose}}/keyframes.tsv"
-    conda:
-        "../envs/posefix.yaml"
+    resources: mem_mb=memory_mb("keyframes")
+    log: log_file("keyframes")
+    benchmark: benchmark_file("keyframes")
+    conda: "../envs/posefix.yaml"
     shell:
         "python {params.script:q} --reference {input.reference:q} --target {input.target:q}"
         " {params.options} --threads {threads} --out {output:q} --log {log:q}"
@@ -38,14 +34,10 @@ rule classify:
         script=stage_script("classify"),
         code=stage_code("classify"),
     threads: config["classify"]["threads"]
-    resources:
-        mem_mb=memory_mb("classify"),
-    log:
-        f"{RESULTS}/logs/{{pose}}/classify.log",
-    benchmark:
-        f"{RESULTS}/benchmarks/{{pose}}/classify.tsv"
-    conda:
-        "../envs/posefix.yaml"
+    resources: mem_mb=memory_mb("classify")
+    log: log_file("classify")
+    benchmark: benchmark_file("classify")
+    conda: "../envs/posefix.yaml"
     shell:
         "python {params.script:q} --keyframes {input.keyframes:q} {params.options}"
         " {params.exclude}"
@@ -63,14 +55,10 @@ rule constraints:
         script=stage_script("constraints"),
         code=stage_code("constraints"),
     threads: config["constraints"]["threads"]
-    resources:
-        mem_mb=memory_mb("constraints"),
-    log:
-        f"{RESULTS}/logs/{{pose}}/constraints.log",
-    benchmark:
-        f"{RESULTS}/benchmarks/{{pose}}/constraints.tsv"
-    conda:
-        "../envs/posefix.yaml"
+    resources: mem_mb=memory_mb("constraints")
+    log: log_file("constraints")
+    benchmark: benchmark_file("constraints")
+    conda: "../envs/posefix.yaml"
     shell:
         "python {params.script:q} --keyframes {input.keyframes:q} --classify {input.classify:q}"
         " {params.options}"
@@ -88,14 +76,10 @@ rule fit:
         script=stage_script("fit"),
         code=stage_code("fit"),
     threads: config["fit"]["threads"]
-    resources:
-        mem_mb=within_limit(int(1000 * config["fit"]["memory_gb"]) + 2000),
-    log:
-        f"{RESULTS}/logs/{{pose}}/fit.log",
-    benchmark:
-        f"{RESULTS}/benchmarks/{{pose}}/fit.tsv"
-    conda:
-        "../envs/posefix.yaml"
+    resources: mem_mb=within_limit(int(1000 * config["fit"]["memory_gb"]) + 2000)
+    log: log_file("fit")
+    benchmark: benchmark_file("fit")
+    conda: "../envs/posefix.yaml"
     shell:
         "python {params.script:q} --constraints {input:q} {params.options}"
         " --checkpoint {params.checkpoint:q} --threads {threads} --mem-mb {resources.mem_mb}"
@@ -113,14 +97,10 @@ rule integrate:
         script=stage_script("integrate"),
         code=stage_code("integrate"),
     threads: config["integrate"]["threads"]
-    resources:
-        mem_mb=memory_mb("integrate"),
-    log:
-        f"{RESULTS}/logs/{{pose}}/integrate.log",
-    benchmark:
-        f"{RESULTS}/benchmarks/{{pose}}/integrate.tsv"
-    conda:
-        "../envs/posefix.yaml"
+    resources: mem_mb=memory_mb("integrate")
+    log: log_file("integrate")
+    benchmark: benchmark_file("integrate")
+    conda: "../envs/posefix.yaml"
     shell:
         "python {params.script:q} --fit {input.fit:q}"
         " --keyframes {input.keyframes:q} {params.options} --threads {threads} --out {output:q} --log {log:q}"

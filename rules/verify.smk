@@ -15,14 +15,10 @@ rule verify:
         script=stage_script("verify"),
         code=stage_code("verify"),
     threads: config["verify"]["threads"]
-    resources:
-        mem_mb=memory_mb("verify"),
-    log:
-        f"{RESULTS}/logs/{{pose}}/verify.log",
-    benchmark:
-        f"{RESULTS}/benchmarks/{{pose}}/verify.tsv"
-    conda:
-        "../envs/posefix.yaml"
+    resources: mem_mb=memory_mb("verify")
+    log: log_file("verify")
+    benchmark: benchmark_file("verify")
+    conda: "../envs/posefix.yaml"
     shell:
         "python {params.script:q} --keyframes {input.keyframes:q} --classify {input.classify:q}"
         " --integrate {input.integrate:q} --fit {input.fit:q} {params.options} {params.contact}"
@@ -42,14 +38,10 @@ rule export:
         script=stage_script("export"),
         code=stage_code("export"),
     threads: 1
-    resources:
-        mem_mb=memory_mb("export"),
-    log:
-        f"{RESULTS}/logs/{{pose}}/export{{suffix}}.log",
-    benchmark:
-        f"{RESULTS}/benchmarks/{{pose}}/export{{suffix}}.tsv"
-    conda:
-        "../envs/posefix.yaml"
+    resources: mem_mb=memory_mb("export")
+    log: log_file("export{suffix}")
+    benchmark: benchmark_file("export{suffix}")
+    conda: "../envs/posefix.yaml"
     shell:
         "python {params.script:q} --artifact {input.verify:q} --reference {input.reference:q}"
         " --target {input.target:q}"

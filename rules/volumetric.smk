@@ -23,12 +23,9 @@ rule volumetric_pose:
         script=stage_script("volumetric_pose"),
         code=stage_code("volumetric_pose"),
     threads: VOLUMETRIC["threads"]
-    log:
-        f"{VOLUMETRIC_AUTHORED}/volumetric_pose.log",
-    benchmark:
-        f"{VOLUMETRIC_AUTHORED}/volumetric_pose.tsv"
-    conda:
-        "../envs/posefix.yaml"
+    log: log_file("volumetric_pose", "", VOLUMETRIC_AUTHORED)
+    benchmark: benchmark_file("volumetric_pose", "", VOLUMETRIC_AUTHORED)
+    conda: "../envs/posefix.yaml"
     shell:
         "python {params.script:q} --mesh {input.mesh:q} --script {input.script:q} --out {output.library:q}"
         " --artifact {output.artifact:q} --name {params.name:q} {params.options} --threads {threads} --log {log:q}"
@@ -56,12 +53,9 @@ rule volumetric_animate:
         script=stage_script("volumetric_animate"),
         code=stage_code("volumetric_animate"),
     threads: ANIMATE["threads"]
-    log:
-        f"{ANIMATED}/volumetric_animate.log",
-    benchmark:
-        f"{ANIMATED}/volumetric_animate.tsv"
-    conda:
-        "../envs/posefix.yaml"
+    log: log_file("volumetric_animate", "", ANIMATED)
+    benchmark: benchmark_file("volumetric_animate", "", ANIMATED)
+    conda: "../envs/posefix.yaml"
     shell:
         "python {params.script:q} --mesh {input.mesh:q} --tracks {input.tracks:q} --out {output.library:q}"
         " --artifact {output.artifact:q} --name {params.name:q} {params.options} {params.rigid}"

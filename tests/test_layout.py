@@ -108,3 +108,15 @@ def test_the_snakemake_files_hold_no_def_longer_than_five_lines():
     long = [f"{path.name}:{line} {name}: {count} lines" for path in sorted((ROOT / "rules").glob("*.smk"))
             + [ROOT / "Snakefile"] for name, line, count in _smk_defs(path) if count > 5]
     assert not long, long
+
+
+def test_every_rules_log_benchmark_and_memory_come_from_one_helper_each():
+    """``log: log_file(...)``, ``benchmark: benchmark_file(...)`` (posefix.workflow.plan.job_files) and
+    ``resources: mem_mb=...`` on one line each: no rule spells its paths out (issue 51)."""
+    spelled = [f"{path.name}:{k + 1} {line.strip()}" for path in sorted((ROOT / "rules").glob("*.smk"))
+               for k, line in enumerate(path.read_text().splitlines())
+               if line.strip() in ("log:", "benchmark:", "resources:")
+               or line.strip().startswith(("log: ", "benchmark: ")) and "_file(" not in line]
+    texts = [path.read_text() for path in (ROOT / "rules").glob("*.smk")]
+    stages = sum(text.count("shell:") for text in texts)  # every rule that runs a stage (the others: old names)
+    assert not spelled and sum(text.count("log: log_file(") for text in texts) == stages, spelled

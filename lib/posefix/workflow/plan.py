@@ -59,6 +59,27 @@ def library(config, wanted):
     return discover_library(config["library"], reference=reference, poses=wanted, name=config["name"])
 
 
+def job_files(folder, job, wildcard="pose"):
+    """The log and benchmark files of a rule's job, ``<folder>/logs/{<wildcard>}/<job>.log`` and
+    ``<folder>/benchmarks/{<wildcard>}/<job>.tsv``, as the rule declares them (wildcards in braces), (log, benchmark);
+    a library's job (no ``wildcard``: None) straight under ``logs/`` and ``benchmarks/``, a job that authors a library
+    (``folder`` the library's; ``wildcard`` "") beside its output.
+
+    Examples
+    --------
+    >>> job_files("results/lib", "verify")
+    ('results/lib/logs/{pose}/verify.log', 'results/lib/benchmarks/{pose}/verify.tsv')
+    >>> job_files("results/lib", "pack-{repair}", None)
+    ('results/lib/logs/pack-{repair}.log', 'results/lib/benchmarks/pack-{repair}.tsv')
+    >>> job_files("authored/rig", "skeletal_pose", "")
+    ('authored/rig/skeletal_pose.log', 'authored/rig/skeletal_pose.tsv')
+    """
+    if wildcard == "":
+        return f"{folder}/{job}.log", f"{folder}/{job}.tsv"
+    sub = f"{{{wildcard}}}/" if wildcard else ""
+    return f"{folder}/logs/{sub}{job}.log", f"{folder}/benchmarks/{sub}{job}.tsv"
+
+
 @contextmanager
 def exit_on_input_error():
     """Within: an InputError ends the run with its one line, ``posefix: error: <file>: <problem>`` (exit status 1)."""
