@@ -1,7 +1,7 @@
 """Stage constraints: space-time interpolation constraints of the vector field (S0 §4.1).
 
 Every vertex of V_C follows a C1 cubic trajectory through its key-frame positions (tangents by
-finite differences, S0, or of a per-vertex cubic spline); sampling it at t_i = i/s gives the
+finite differences as in S0 §4.1, or of a per-vertex cubic spline); sampling it at t_i = i/s gives the
 space-time points y = (c(t_i), tau t_i) and tangents c'(t_i) the field must interpolate. See
 ``posefix.spacetime.constraints``.
 """
@@ -34,7 +34,7 @@ def build_parser():
     parser.add_argument("--tau", type=float, default=0.3,
                         help="time-axis scale relative to the reference's bbox diagonal")
     parser.add_argument("--tangents", choices=("hermite", "spline"), default=defaults["tangents"],
-                        help="knot tangents: finite differences (S0) or per-vertex cubic spline")
+                        help="knot tangents: finite differences (the paper's) or per-vertex cubic spline")
     return parser
 
 

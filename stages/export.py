@@ -1,4 +1,4 @@
-"""Stage export: write the repaired pose (S0's, or a baseline repair's) in the target's own file format.
+"""Stage export: write the repaired pose (space-time's, or another repair's) in the target's own file format.
 
 Same format and compression as the target file, identical faces and vertex order; for OBJ the
 target's text is kept line by line except for the vertex (and per-vertex normal) lines (see
@@ -18,7 +18,7 @@ from posefix.workflow.timings import Timings
 
 def build_parser():
     parser = stage_parser("export", __doc__)
-    parser.add_argument("--artifact", required=True, help="verify.h5 (S0) or a baseline's artifact of the pose")
+    parser.add_argument("--artifact", required=True, help="verify.h5 (space-time) or another repair's artifact of the pose")
     parser.add_argument("--stage", default="verify", choices=("verify", "repair_medial", "repair_volumetric", "repair_contact"),
                         help="the stage that wrote --artifact: its dataset 'repaired' is written")
     parser.add_argument("--reference", required=True,

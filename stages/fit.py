@@ -66,7 +66,7 @@ def build_parser():
                         help="p: worst constraints considered per iteration")
     parser.add_argument("--batch", type=int, default=defaults["batch"], help="m: centres added per iteration")
     parser.add_argument("--selection", choices=("fps", "worst"), default=defaults["selection"],
-                        help="fps: farthest points within the candidates (S0); worst: the m worst (Carr et al.)")
+                        help="fps: farthest points within the candidates (the paper's); worst: the m worst (Carr et al.)")
     parser.add_argument("--update", choices=("blocked", "full"), default=defaults["update"],
                         help="blocked Cholesky updates or full LU refactorization every iteration")
     parser.add_argument("--memory-gb", type=float, default=defaults["memory_bytes"] / 1e9,

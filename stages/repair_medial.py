@@ -1,7 +1,7 @@
-"""Stage repair_medial: the medial repair of one pose (S1's medial balls and flow), a baseline beside S0.
+"""Stage repair_medial: the medial repair of one pose (medial balls and their flow, S1 §2-4), compared beside space-time.
 
 Carries the reference's medial balls (stage skeleton) into the target, rebuilds the damaged region on
-them and runs S1's medial-ball flow until no new self-intersection remains (intersections the reference
+them and runs the medial-ball flow (S1 §4) until no new self-intersection remains (intersections the reference
 has too do not count) or ``--max-iters``. See ``posefix.skeletal.repair``.
 """
 
@@ -19,7 +19,7 @@ DOCS = {
     "start": ("length", "the target pose, (n, 3) float64"),
     "repaired": ("length", "the medial-repaired pose, (n, 3) float64"),
     "intersecting": ("faces", "new intersecting faces (not intersecting in the reference) before every flow iteration (0: the rebuilt start) and after the last, (k+1,) int64"),
-    "error": ("length", "S1's sum_i |f(x_i)| at the same moments, (k+1,) float64"),
+    "error": ("length", "the flow's error sum_i |f(x_i)| (S1 §4) at the same moments, (k+1,) float64"),
     "step_seconds": ("s", "seconds of each flow step, (k,) float64"),
     "skeleton": ("length", "the deformed skeletal mesh (ball centres; radii are the reference's), (n, 3) float64"),
     "free": ("bool", "the damaged region rebuilt on the carried balls, (n,) bool"),
@@ -35,7 +35,7 @@ def build_parser():
     parser.add_argument("--out", required=True, help="medial.h5 to write")
     parser.add_argument("--margin", type=float, default=0.01,
                         help="clearance kept between parts apart at rest, relative to the bbox diagonal")
-    parser.add_argument("--tau", type=float, default=defaults["tau"], help="step size of the flow (S1 Eq. 9)")
+    parser.add_argument("--tau", type=float, default=defaults["tau"], help="step size of the medial-ball flow")
     parser.add_argument("--neighbours", type=int, default=defaults["neighbours"], help="candidate balls per vertex")
     parser.add_argument("--max-reach", type=int, default=defaults["max_reach"],
                         help="largest damaged region tried, in ball radii around the new intersections")

@@ -1,7 +1,8 @@
-"""Stage repair_volumetric: the volumetric fill of one pose (S4's editor), a baseline beside S0.
+"""Stage repair_volumetric: the volumetric fill of one pose (the volumetric editor, S4 §2), compared beside space-time.
 
 The target's V_C vertices (stage classify) become point handles of the reference's tet mesh (stage
-tet_mesh) at their target positions; S4's iterations fill the free region, S4's transfer gives the surface.
+tet_mesh) at their target positions; the editor's iterations fill the free region, its transfer (S4 §2.4) gives the
+surface.
 The free region grows by rings until no new self-intersection remains (intersections the reference has
 too do not count). See ``posefix.volumetric.fill``.
 """
@@ -33,7 +34,7 @@ def build_parser():
     parser.add_argument("--tets", required=True, help="tets.h5 of the reference (stage tet_mesh)")
     parser.add_argument("--out", required=True, help="volumetric.h5 to write")
     parser.add_argument("--iterations", type=int, default=defaults["iterations"],
-                        help="S4 iterations (linear solve, rotations, update)")
+                        help="volumetric editor iterations (linear solve, rotations, update)")
     parser.add_argument("--point-weight", type=float, default=defaults["point_weight"],
                         help="weight of the V_C point handles, relative to the mean diagonal of the tet Laplacian")
     parser.add_argument("--max-rings", type=int, default=defaults["max_rings"],

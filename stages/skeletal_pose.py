@@ -1,11 +1,11 @@
-"""Stage skeletal_pose: author a pose library from a reference mesh and a rig (S1: skeleton-driven deformation).
+"""Stage skeletal_pose: author a pose library from a reference mesh and a rig (skeleton-driven deformation, S1 §2-4).
 
 Builds the skeletal mesh of the reference (medial balls, S1 §2), poses it with the rig's linear blend
 skinning, and writes every pose of the rig file in three variants (``<pose>-ssd``: skinning of the mesh;
 ``<pose>-variational``: the reconstruction of S1 §3; ``<pose>-flow``: then the medial-ball flow of S1 §4)
 into one folder, with the reference, in the reference's file format, faces and vertex order: a pose
 library the repair workflow reads (``snakemake --config library=<folder>``). The artifact records the
-skeletal mesh, intersecting faces, S1's error sum |f| and seconds per pose and variant, and the flow's
+skeletal mesh, intersecting faces, the flow's error sum |f| (S1 §4) and seconds per pose and variant, and the flow's
 history.
 """
 
@@ -32,7 +32,7 @@ DOCS = {
     "skeleton/source": ("label", "which method gave each centre (see the stage log), (n,) int8"),
     "skeleton/bad": ("bool", "centres still outside the surface or crossing it, (n,) bool"),
     "intersecting": ("faces", "intersecting faces per pose and variant (ssd, variational, flow), (P, 3) int64"),
-    "error": ("length", "S1's error sum_i |f(x_i)| over the deformed balls, per pose and variant, (P, 3) float64"),
+    "error": ("length", "the flow's error sum_i |f(x_i)| (S1 §4) over the deformed balls, per pose and variant, (P, 3) float64"),
     "seconds": ("s", "wall seconds per pose and variant (flow: without its reconstruction), (P, 3) float64"),
 }
 
@@ -54,9 +54,9 @@ def build_parser():
                         help="so do skeletal triangles smaller than this x their mesh triangle (collapsed skeleton)")
     parser.add_argument("--tau", type=float, default=flow["tau"], help="step size of the medial-ball flow (Eq. 9)")
     parser.add_argument("--margin", type=float, default=0.01,
-                        help="flow margin / bbox diagonal between parts apart at rest (0 = S1's flow)")
+                        help="flow margin / bbox diagonal between parts apart at rest (0: the paper's flow, no margin)")
     parser.add_argument("--neighbours", type=int, default=flow["neighbours"],
-                        help="candidate balls per vertex at most in the flow (0: all within R_i, S1)")
+                        help="candidate balls per vertex at most in the flow (0: all within R_i, as the paper)")
     parser.add_argument("--max-iters", type=int, default=flow["max_iters"], help="flow iterations at most")
     return parser
 

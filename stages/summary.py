@@ -4,7 +4,7 @@ Reads the metrics of every pose's artifacts (``results/<library>/<pose>/*.h5``) 
 benchmark files, and writes ``reports/<library>/summary.json`` (schema in docs/artifacts.md) and
 ``summary.md`` (``posefix.report.summary``). With ``--baselines``, every pose's entry also compares
 the baseline repairs (``<pose>/<name>.h5``): their intersections, and their deviation from the
-target over S0's ``V_C`` (``classify.h5``) and the rest, measured as S0's. Every repaired pose's distortion
+target over space-time's ``V_C`` (``classify.h5``) and the rest, measured as space-time's. Every repaired pose's distortion
 (worst edge-length and face-area ratios against the target and the reference, faces beyond
 ``--distortion-limit`` against both) is measured here too (``posefix.mesh.distortion``).
 """
@@ -60,7 +60,7 @@ def summarize_pose(results, pose, baselines=(), limit=4.0):
         d = float(metrics["keyframes"]["bbox_diagonal"])
         compared = {name: summarize_baseline(folder / f"{name}.h5", name, mask, d, downstream, measure)
                     for name in baselines}
-        for name, entry in compared.items():  # wall seconds of the stage, as S0's (the artifact's: in-process)
+        for name, entry in compared.items():  # wall seconds of the stage, as space-time's (the artifact's: in-process)
             wall = benchmark_seconds(Path(results) / "benchmarks" / pose, f"repair_{name}")
             entry["seconds"] = entry["seconds"] if wall is None else wall
     return pose_entry(pose, metrics, downstream, seconds, compared, measure(repaired))

@@ -1,9 +1,9 @@
 """Stage volumetric_animate: animate a reference mesh by motion-capture marker tracks (S4 §3.2).
 
 Builds a coarse tet mesh of the reference, attaches every marker to it as a point handle (by reference
-vertex id, or at its position in the first frame, which must then be the rest pose: S4's markers may sit
-slightly outside the surface), and solves every frame with a few S4 iterations warm-started from the
-previous frame; the surface follows by S4's transfer. Writes the reference and one mesh per frame into one
+vertex id, or at its position in the first frame, which must then be the rest pose: the markers of S4 §3.2 may sit
+slightly outside the surface), and solves every frame with a few iterations of the volumetric editor warm-started from the
+previous frame; the surface follows by the editor's transfer (S4 §2.4). Writes the reference and one mesh per frame into one
 folder, in the reference's format, faces and vertex order: a pose library the repair workflow reads. The
 artifact records the marker residuals per frame.
 """
@@ -72,9 +72,9 @@ def build_parser():
     parser.add_argument("--tet-vertices", type=int, default=library_defaults(tet_mesh)["surface_vertices"],
                         help="surface vertices of the decimated mesh the tets are built from")
     parser.add_argument("--iterations", type=int, default=animate["iterations"],
-                        help="S4 iterations per frame, warm-started from the previous frame")
+                        help="volumetric editor iterations per frame, warm-started from the previous frame")
     parser.add_argument("--first-iterations", type=int, default=animate["first_iterations"],
-                        help="S4 iterations of the first frame, from the rest pose's rotations")
+                        help="volumetric editor iterations of the first frame, from the rest pose's rotations")
     parser.add_argument("--rigid", type=named_box, action="append", default=[], metavar="NAME=x0,y0,z0,x1,y1,z1",
                         help="a rigid region: the tets wholly inside the box (repeatable)")
     return parser

@@ -1,8 +1,8 @@
-"""Stage volumetric_pose: author a pose library from a reference mesh and a pose script (S4: volumetric editing).
+"""Stage volumetric_pose: author a pose library from a reference mesh and a pose script (volumetric editing, S4 §2).
 
 Builds a coarse tet mesh of the reference (decimated surface, tetrahedralized), resolves the script's handles
-and rigid regions on it, and poses it with S4's iterative editor for every pose of the script; the surface
-follows the tets by S4's smooth transfer (§2.4, Wendland-blended barycentric coordinates). Writes the
+and rigid regions on it, and poses it with the iterative volumetric editor (S4 §2.3) for every pose of the script; the surface
+follows the tets by the editor's smooth transfer (S4 §2.4, Wendland-blended barycentric coordinates). Writes the
 reference and one mesh per pose into one folder, in the reference's format, faces and vertex order: a pose
 library the repair workflow reads. The artifact records the tet mesh, its posed vertices, the shear history
 and seconds per pose.
@@ -45,7 +45,7 @@ def build_parser():
     parser.add_argument("--tet-vertices", type=int, default=library_defaults(tet_mesh)["surface_vertices"],
                         help="surface vertices of the decimated mesh the tets are built from")
     parser.add_argument("--iterations", type=int, default=poser["iterations"],
-                        help="S4 iterations per frame (linear solve, rotations, update)")
+                        help="volumetric editor iterations per frame (linear solve, rotations, update)")
     parser.add_argument("--frames", type=int, default=poser["frames"],
                         help="frames a pose is reached in, each warm-started from the last")
     return parser

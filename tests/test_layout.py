@@ -2,6 +2,8 @@
 functions."""
 
 import ast
+import importlib.util
+import re
 import subprocess
 import sys
 
@@ -120,3 +122,29 @@ def test_every_rules_log_benchmark_and_memory_come_from_one_helper_each():
     texts = [path.read_text() for path in (ROOT / "rules").glob("*.smk")]
     stages = sum(text.count("shell:") for text in texts)  # every rule that runs a stage (the others: old names)
     assert not spelled and sum(text.count("log: log_file(") for text in texts) == stages, spelled
+
+
+SEED_LABEL = re.compile(r"\bS[014]\b")
+CITATION = re.compile(r"\bS[014] (§|Eq\. |Fig\. |Table )")
+"""A seed label that cites: followed by a section, equation, figure or table of its paper (``S0 §4.1``)."""
+
+
+def test_seed_labels_appear_only_in_citations_and_never_in_help_text():
+    """Users read the repairs' names (space-time, medial, volumetric, contact); S0/S1/S4 only cite the papers, in
+    the stages, the config, its schema and the report (issue 51), and never in a stage's option help."""
+    report = [path for path in (ROOT / "lib" / "posefix" / "report").rglob("*")
+              if path.is_file() and "vendor" not in path.parts and path.suffix in (".py", ".js", ".html", ".css")]
+    paths = [*sorted((ROOT / "stages").glob("*.py")), ROOT / "config.yaml",
+             *sorted((ROOT / "schemas").glob("*.yaml")), *sorted(report)]
+    loose = [f"{path.relative_to(ROOT)}:{k + 1}: {line.strip()}" for path in paths
+             for k, line in enumerate(path.read_text().splitlines())
+             if len(SEED_LABEL.findall(line)) > len(CITATION.findall(line))]
+    assert not loose, "\n".join(loose)
+    helps = []
+    for path in sorted((ROOT / "stages").glob("*.py")):
+        spec = importlib.util.spec_from_file_location(f"stage_{path.stem}", path)
+        module = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(module)
+        helps += [f"{path.name} {', '.join(action.option_strings)}: {action.help}"
+                  for action in module.build_parser()._actions if SEED_LABEL.search(action.help or "")]
+    assert not helps, helps

@@ -69,7 +69,7 @@ def test_demo_poses_are_repaired(demo_run):
         assert np.array_equal(F, F2) and V.shape == V_tgt.shape
     markdown = (demo_run / "reports" / "demo" / "summary.md").read_text()
     # the repair table, the downstream table and S0 vs the baseline repairs (config baselines)
-    assert markdown.count("| demo-") == 3 * len(POSES) and "## S0 vs the baseline repairs" in markdown
+    assert markdown.count("| demo-") == 3 * len(POSES) and "## Space-time vs the other repairs" in markdown
 
 
 @pytest.mark.parametrize("name", ["medial", "volumetric", "contact"])
@@ -106,7 +106,7 @@ def test_the_report_compares_s0_with_the_baseline_repairs(demo_run, name):
         renders, deviation_map = imread(figures / "renders.png"), imread(figures / "deviation.png")
         assert 2 * renders.shape[1] == 5 * deviation_map.shape[1]  # five panels of 5 inches, two of 5
     page = (demo_run / "reports" / "demo" / "summary.html").read_text()
-    assert "<th>new faces S0 / medial / volumetric / contact</th>" in page
+    assert "<th>new faces space-time / medial / volumetric / contact</th>" in page
 
 
 def test_baselines_reach_the_report_and_the_check(tmp_path):

@@ -111,9 +111,9 @@ def test_markdown_compares_s0_with_the_baseline_per_pose():
     e = pose_entry("p-01", _metrics(), d, seconds, baselines)
     assert e["baselines"] == baselines and e == {**pose_entry("p-01", _metrics(), d, seconds), "baselines": baselines}
     lines = summary_markdown("lib", [e]).splitlines()
-    at = lines.index("## S0 vs the baseline repairs")
-    assert lines[at + 2] == ("| pose | new faces S0 / medial | V_C dev. mean S0 / medial | V_C dev. max S0 / medial | "
-                             "free dev. max S0 / medial | seconds S0 / medial | GN converged S0 / medial |")
+    at = lines.index("## Space-time vs the other repairs")
+    assert lines[at + 2] == ("| pose | new faces space-time / medial | V_C dev. mean space-time / medial | V_C dev. max space-time / medial | "
+                             "free dev. max space-time / medial | seconds space-time / medial | GN converged space-time / medial |")
     # S0: 1 new face, 1e-3 everywhere, 6 stages keyframes..verify x 1.5 s, 2 runs converged; medial: the above
     assert lines[at + 4] == "| p-01 | 1 / 5 | 0.001 / 0.01 | 0.001 / 0.01 | 0.001 / 0.2 | 9.0 / 2.5 | 2 / 1 |"
 
@@ -158,8 +158,8 @@ def test_summary_and_overview_stages_compare_the_baseline(tmp_path):
                                    "limit": 4.0}  # S0's repair: the target
     assert medial["distortion"]["edge_target"] > 1.0 and medial["distortion"]["limit"] == 4.0
     assert "| p-01 | 1 / 5 | 0.001 / 0.01 |" in (out / "s.md").read_text()
-    assert "S0 vs the baseline" not in (out / "plain.md").read_text()
+    assert "Space-time vs the other" not in (out / "plain.md").read_text()
     run_stage("overview", "--summary", out / "s.json", "--png", out / "o.png", "--html", out / "o.html")
     page = (out / "o.html").read_text()
-    assert "<th>new faces S0 / medial</th>" in page and "<td>1 / 5</td><td>0.001 / 0.01</td>" in page
+    assert "<th>new faces space-time / medial</th>" in page and "<td>1 / 5</td><td>0.001 / 0.01</td>" in page
     assert (out / "o.png").stat().st_size > 10_000

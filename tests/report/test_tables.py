@@ -106,24 +106,25 @@ def test_the_comparison_puts_s0_and_the_baseline_side_by_side():
     from posefix.report.tables import comparison_table, compared_repairs
     a = _with_medial(_entry("a", new=2), new=7, vc_max=2e-2, seconds=3.25)
     assert compared_repairs(a, ["medial"]) == {
-        "S0": {"new": 2, "constrained_mean": 1e-4, "constrained_max": 1e-3, "free_max": 5e-2, "seconds": 6.0,
-               "converged": None, "edge": None, "distorted": None},  # S0's seconds: keyframes to verify (5 + 1)
+        "space-time": {"new": 2, "constrained_mean": 1e-4, "constrained_max": 1e-3, "free_max": 5e-2, "seconds": 6.0,
+                       "converged": None, "edge": None, "distorted": None},  # its seconds: keyframes to verify (5 + 1)
         "medial": {"new": 7, "constrained_mean": 1e-2, "constrained_max": 2e-2, "free_max": 0.3, "seconds": 3.25,
                    "converged": None, "edge": None, "distorted": None}}
     header, rows = comparison_table([a])
-    assert header == ["pose", "new faces S0 / medial", "V_C dev. mean S0 / medial", "V_C dev. max S0 / medial",
-                      "free dev. max S0 / medial", "seconds S0 / medial"]  # no GN column without the check
+    assert header == ["pose", "new faces space-time / medial", "V_C dev. mean space-time / medial",
+                      "V_C dev. max space-time / medial", "free dev. max space-time / medial",
+                      "seconds space-time / medial"]  # no GN column without the check
     assert rows == [["a", "2 / 7", "0.0001 / 0.01", "0.001 / 0.02", "0.05 / 0.3", "6.0 / 3.2"]]
     assert comparison_table([_entry("a")]) == ([], [])
     measured = {"edge_target": 2.5, "area_target": 3.0, "edge_reference": 2.0, "area_reference": 2.0, "limit": 4.0}
     a["distortion"], a["baselines"]["medial"]["distortion"] = measured | {"faces_over": 0}, measured | {"faces_over": 3}
     header, rows = comparison_table([a])
-    assert header[5:7] == ["worst edge ratio S0 / medial", "distorted faces S0 / medial"]
+    assert header[5:7] == ["worst edge ratio space-time / medial", "distorted faces space-time / medial"]
     assert rows[0][5:7] == ["2.5 / 2.5", "0 / 3"]
     page = summary_html("lib", [a])
-    assert "<h3>S0 vs the baseline repairs</h3>" in page and "<td>2 / 7</td>" in page
+    assert "<h3>Space-time vs the other repairs</h3>" in page and "<td>2 / 7</td>" in page
     assert "GN converged" not in page.split("<h3>")[1]  # neither as a column nor in the note
-    assert "S0 vs the baseline" not in summary_html("lib", [_entry("a")])
+    assert "Space-time vs the other" not in summary_html("lib", [_entry("a")])
 
 
 def test_the_comparison_counts_converged_runs_towards_each_repair():
@@ -131,7 +132,7 @@ def test_the_comparison_counts_converged_runs_towards_each_repair():
     e = {**_entry("a"), "downstream": _downstream([40, 50, 200], [True, True, False], [20, 30, 25],
                                                    [True, False, True])}
     header, rows = comparison_table([_with_medial(e, 0, 1e-3, 1.0, converged=[True, False, False])])
-    assert header[-1] == "GN converged S0 / medial" and rows[0][-1] == "2 / 1"
+    assert header[-1] == "GN converged space-time / medial" and rows[0][-1] == "2 / 1"
     assert "'GN converged': Gauss-Newton runs" in comparison_note(header)
 
 
@@ -144,12 +145,12 @@ def test_library_overview_draws_the_baseline_beside_s0():
     assert len(fig.axes) == 6 and pixels(fig).var() > 0
     faces, deviations, _, seconds, converged, _ = fig.axes
     labels = [t.get_text() for t in faces.get_legend().get_texts()]
-    assert labels == ["target", "S0: new", "S0: new, in pass-through", "medial: new"]
+    assert labels == ["target", "space-time: new", "space-time: new, in pass-through", "medial: new"]
     medial_bars = faces.containers[-1]
     assert [b.get_height() for b in medial_bars] == [4, 0]
     assert [line.get_label() for line in deviations.get_lines()][3:6] == ["medial V_C max", "medial V_C mean",
                                                                           "medial free max"]
     assert [b.get_height() for b in seconds.containers[-1]] == [2.0, 5.0]
     assert [b.get_height() for b in converged.containers[-1]] == [2, 0]  # runs converged towards medial
-    assert [t.get_text() for t in converged.get_legend().get_texts()] == ["runs per example", "original target", "S0",
-                                                                          "medial"]
+    assert [t.get_text() for t in converged.get_legend().get_texts()] == ["runs per example", "original target",
+                                                                          "space-time", "medial"]

@@ -259,12 +259,12 @@ def _offsets(count):
 
 
 def _intersection_panel(ax, x, entries, names):
-    """Overview panel 1: intersecting faces of the target, new ones of S0's and the baselines' repairs."""
+    """Overview panel 1: intersecting faces of the target, new ones of the space-time repair and the others."""
     dx, width = _offsets(2 + len(names))
     ax.bar(x + dx[0], [e["intersecting_faces"]["target"] for e in entries], width, label="target")
     new = np.array([e["intersecting_faces"]["repaired_new"] for e in entries])
     inside = np.array([e["intersecting_faces"].get("repaired_new_in_fallback", 0) for e in entries])
-    s0 = "S0" if names else "repaired"
+    s0 = "space-time" if names else "repaired"
     ax.bar(x + dx[1], new - inside, width, color="tab:red", label=f"{s0}: new")
     ax.bar(x + dx[1], inside, width, bottom=new - inside, color="tab:pink", label=f"{s0}: new, in pass-through")
     for j, name in enumerate(names):
@@ -275,8 +275,8 @@ def _intersection_panel(ax, x, entries, names):
 
 
 def _deviation_panel(ax, x, entries, names, bar):
-    """Overview panel 2: deviations from the target, S0 filled markers, each baseline hollow beside it."""
-    sources = [("S0 " if names else "", 0.0, "full", [e["deviation"] for e in entries])]
+    """Overview panel 2: deviations from the target, space-time filled markers, each other repair hollow beside it."""
+    sources = [("space-time " if names else "", 0.0, "full", [e["deviation"] for e in entries])]
     sources += [(f"{name} ", 0.15 * (j + 1), "none", [e["baselines"][name]["deviation"] for e in entries])
                 for j, name in enumerate(names)]
     for prefix, shift, fill, deviations in sources:
@@ -308,7 +308,7 @@ def _seconds_panel(ax, x, entries, names):
 def _downstream_panels(fig, x, entries, names):
     """Overview panels 5 and 6: Gauss–Newton convergence (original, repaired and the baselines ``names``)
     and iterations, original vs repaired."""
-    counts, s0 = [downstream_counts(e) for e in entries], "S0" if names else "repaired pose"
+    counts, s0 = [downstream_counts(e) for e in entries], "space-time" if names else "repaired pose"
     series = [([c["converged_original"] for c in counts], "original target", "tab:gray"),
               ([c["converged_repaired"] for c in counts], s0, "tab:green")]
     series += [([converged_runs(e["baselines"][name]["downstream"], name) for e in entries], name, BASELINE_COLORS[j])
@@ -333,7 +333,7 @@ def _downstream_panels(fig, x, entries, names):
 def library_overview(entries, bar=DEVIATION_BAR, title=""):
     """All poses of a library at a glance: intersections, deviation, centres, seconds, and the
     downstream Gauss–Newton check (converged runs, iterations) when the entries have it; the
-    baseline repairs (``summary.json``'s ``baselines``) beside S0's.
+    other repairs (``summary.json``'s ``baselines``) beside space-time's.
 
     Parameters
     ----------

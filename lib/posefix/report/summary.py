@@ -96,9 +96,9 @@ def baseline_entry(name, metrics, deviation, downstream, distortion=None):
         The ``metrics`` of its artifact (``<pose>/<name>.h5``).
     deviation : dict
         Deviation summary of its repaired pose from the target over ``V_C`` and the rest
-        (:func:`posefix.verify.deviation.deviation`, the same as S0's).
+        (:func:`posefix.verify.deviation.deviation`, the same as space-time's).
     downstream : dict of str -> ndarray
-        Datasets of ``downstream.h5``; the entry gets a ``downstream`` like S0's (:func:`downstream_entry`)
+        Datasets of ``downstream.h5``; the entry gets a ``downstream`` like space-time's (:func:`downstream_entry`)
         when the check ran towards the baseline.
     distortion : dict, optional
         As :func:`pose_entry`'s, of the baseline's repaired pose.
@@ -136,7 +136,7 @@ def downstream_entry(d, examples=EXAMPLES):
     d : dict of str -> ndarray
         :data:`DOWNSTREAM_DATASETS` of ``downstream.h5``.
     examples : sequence of str
-        The examples to list: S0's (the original target and the repaired pose), or a baseline's name.
+        The examples to list: space-time's (the original target and the repaired pose), or another repair's name.
         ``seconds`` sums their runs.
     """
     codes = {name: code for code, name in enumerate(example_names(d))}

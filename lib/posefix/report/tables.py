@@ -142,7 +142,7 @@ def baseline_names(entries):
 
 
 def repair_seconds(entry):
-    """Wall seconds of S0's repair of a pose: its stages keyframes to verify (:data:`TIMED_STAGES`,
+    """Wall seconds of the space-time repair of a pose: its stages keyframes to verify (:data:`TIMED_STAGES`,
     ``seconds_stages`` from the Snakemake benchmark files), float."""
     return sum(entry["seconds_stages"].get(stage) or 0.0 for stage in TIMED_STAGES)
 
@@ -153,14 +153,14 @@ def converged_runs(downstream, example):
 
 
 def compared_repairs(entry, names):
-    """S0's repair of a pose and the baselines ``names``, side by side: ``{"S0": ..., name: ...}``.
+    """The space-time repair of a pose and the other repairs ``names``, side by side: ``{"space-time": ..., name: ...}``.
 
     Each value has ``new`` (new intersecting faces), ``constrained_mean``, ``constrained_max``,
     ``free_max`` (deviations / d), ``edge`` and ``distorted`` (worst edge-length ratio against the target,
-    faces beyond the distortion limit; None where not measured), ``seconds`` (S0: :func:`repair_seconds`; a baseline: its own) and
+    faces beyond the distortion limit; None where not measured), ``seconds`` (space-time: :func:`repair_seconds`; another repair: its own) and
     ``converged`` (converged Gauss–Newton runs towards it; None without the check).
     """
-    out = {"S0": _compared(entry, repair_seconds(entry), "repaired")}
+    out = {"space-time": _compared(entry, repair_seconds(entry), "repaired")}
     for name in names:
         out[name] = _compared(entry["baselines"][name], entry["baselines"][name]["seconds"], name)
     return out
@@ -183,7 +183,7 @@ COMPARISON = (("new faces", "new", "{}"), ("V_C dev. mean", "constrained_mean", 
 
 
 def comparison_table(entries):
-    """S0 vs the baseline repairs per pose: ``(header, rows)``, lists of str, one cell ``S0 / <baseline> ...``
+    """Space-time vs the other repairs per pose: ``(header, rows)``, lists of str, one cell ``space-time / <repair> ...``
     per :data:`COMPARISON` column (``GN converged`` only when every repair has the downstream check, the
     distortion columns only when every repair was measured);
     ``([], [])`` without baselines."""
@@ -193,7 +193,7 @@ def comparison_table(entries):
     repairs = [compared_repairs(e, names) for e in entries]
     columns = [c for c in COMPARISON
                if all(r[c[1]] is not None for rs in repairs for r in rs.values())]
-    header = ["pose"] + [f"{label} {' / '.join(['S0', *names])}" for label, _, _ in columns]
+    header = ["pose"] + [f"{label} {' / '.join(['space-time', *names])}" for label, _, _ in columns]
     rows = [[e["pose"]] + [" / ".join(fmt.format(r[key]) for r in rs.values()) for _, key, fmt in columns]
             for e, rs in zip(entries, repairs)]
     return header, rows
@@ -202,7 +202,7 @@ def comparison_table(entries):
 def comparison_note(header):
     """What the columns of a :func:`comparison_table` with ``header`` mean, str."""
     note = ("'new faces': intersecting in the repaired pose but not in the reference; deviations from the target "
-            "relative to the bbox diagonal, over S0's V_C and the rest; seconds: S0's stages keyframes to verify "
+            "relative to the bbox diagonal, over space-time's V_C and the rest; seconds: space-time's stages keyframes to verify "
             "(benchmark files), a baseline's stage (without the skeleton, once per library)")
     if any(h.startswith("worst edge ratio") for h in header):
         note += ("; 'worst edge ratio': the largest edge-length ratio (or its inverse) against the target; "
@@ -214,11 +214,11 @@ def comparison_note(header):
 
 
 def comparison_markdown(entries):
-    """``summary.md``'s section comparing S0 with the baseline repairs, list of str lines (none without baselines)."""
+    """``summary.md``'s section comparing space-time with the other repairs, list of str lines (none without baselines)."""
     header, rows = comparison_table(entries)
     if not rows:
         return []
-    return (["", "## S0 vs the baseline repairs", "", "| " + " | ".join(header) + " |",
+    return (["", "## Space-time vs the other repairs", "", "| " + " | ".join(header) + " |",
              "|---|" + "---:|" * (len(header) - 1)] + ["| " + " | ".join(row) + " |" for row in rows]
             + ["", comparison_note(header)])
 
@@ -230,7 +230,7 @@ def _comparison_html(entries):
         return ""
     head = "".join(f"<th>{html.escape(h)}</th>" for h in header)
     body = "".join("<tr>" + "".join(f"<td>{html.escape(c)}</td>" for c in row) + "</tr>" for row in rows)
-    return (f"<h3>S0 vs the baseline repairs</h3><p>{html.escape(comparison_note(header))}</p>"
+    return (f"<h3>Space-time vs the other repairs</h3><p>{html.escape(comparison_note(header))}</p>"
             f"<table><thead><tr>{head}</tr></thead><tbody>{body}</tbody></table>")
 
 
