@@ -95,7 +95,7 @@ def lion_runs(work, cores):
         name = "lion-poses" if kind == "folder" else "lion"
         subprocess.run([sys.executable, "-m", "snakemake", "-s", str(ROOT / "Snakefile"), "--directory",
                         str(work / kind), "--cores", str(cores), f"reports/{name}/summary.json", "--config",
-                        f"library={library}", "baselines=[]", "downstream={'max_iters': 1}"]
+                        f"library={library}", "repairs=[]", "downstream={'max_iters': 1}"]
                        + (["reference=1"] if kind == "abc" else []), check=True)
         summary = json.loads((work / kind / "reports" / name / "summary.json").read_text())
         runs[kind] = [(pose, *entry) for pose, entry in zip(names, [

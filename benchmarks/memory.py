@@ -63,7 +63,7 @@ def run_case(name, cores, root, run=True, extra=()):
             subdivided_kids(folder)
         cmd = [sys.executable, "-m", "snakemake", "-s", str(ROOT / "Snakefile"), "--cores", str(cores), "--config",
                f"library={folder}", f"reference={reference}", f"poses={pose}"]
-        cmd += ([f"baselines={baselines}"] if baselines else []) + list(extra)
+        cmd += ([f"repairs={baselines}"] if baselines else []) + list(extra)
         print("+", " ".join(cmd), flush=True)
         subprocess.run(cmd, cwd=root, check=True)
     results = root / "results" / folder.name
@@ -86,7 +86,7 @@ def _stages(results, pose):
 def rule_memory_mb(stage, vertices):
     """The mem_mb the rule of ``stage`` asks for (no run limit): the fit's is its kernel cache's budget (config
     fit.memory_gb) and 2 GB, the others' their stage's measured line (int)."""
-    rule = "export_baseline" if stage.startswith("export_") else stage
+    rule = "export_repair" if stage.startswith("export_") else stage
     if rule == "fit":
         return int(1000 * yaml.safe_load((ROOT / "config.yaml").read_text())["fit"]["memory_gb"]) + 2000
     return stage_memory_mb(rule, vertices)

@@ -7,7 +7,7 @@ targets: space-time integration (S0) with the contact finish's elastic and posit
 library in one go: with the elastic finish and every baseline (results/<library>), then with the positional finish
 alone (results/<library>-positional-finish, from the first run's artifacts up to integrate), the downstream check
 towards every repaired pose both times
-(``downstream.baselines: true``; Snakemake reuses what is up to date; ``--quick-downstream``: the default one setting,
+(``downstream.repairs: true``; Snakemake reuses what is up to date; ``--quick-downstream``: the default one setting,
 alpha 1 and k_b 1e-2, instead of the grid). One table from the summary.json files:
 poses with no new intersecting face, poses "ok" (the report's status), deviation from the target over V_C and
 over the free vertices (relative
@@ -34,11 +34,11 @@ from posefix.report.tables import entry_status, repair_seconds
 ROOT = Path(__file__).resolve().parents[1]
 DATA = Path(os.environ.get("POSEFIX_DATA", ROOT.parent / "shared" / "data"))
 LIBRARIES = ("lion-poses", "cat-poses", "horse-poses", "camel-poses")
-CHECK_BASELINES = f"downstream={ {'baselines': True, **GRID} }"
+CHECK_BASELINES = f"downstream={ {'repairs': True, **GRID} }"
 """The downstream check towards every repair over the grid of six settings (``make bench``)."""
-QUICK_DOWNSTREAM = "downstream={'baselines': True}"
+QUICK_DOWNSTREAM = "downstream={'repairs': True}"
 ELASTIC_FINISH = "verify={'finish': 'contact', 'free_goal': 'elastic'}"
-POSITIONAL_FINISH = ("verify={'finish': 'contact', 'free_goal': 'blend'}", "baselines=[]")
+POSITIONAL_FINISH = ("verify={'finish': 'contact', 'free_goal': 'blend'}", "repairs=[]")
 """The second run of a library: S0 with the positional finish, no baselines (they are the first run's)."""
 SUFFIX = "-positional-finish"
 KEEP_INTERMEDIATES = "keep_intermediates=true"

@@ -32,7 +32,7 @@ CASES = {  # library folder -> (reference, pose)
 }
 STAGES = ("validate", "keyframes", "classify", "constraints", "fit", "integrate", "verify", "export", "downstream")
 S0_GOBLIN = {"vertices": 86000, "centers": 10000, "fit_seconds": 603.0}
-RUN_CONFIG = ["baselines=[]"]
+RUN_CONFIG = ["repairs=[]"]
 EVALUATION = {"constraints": 150_000, "centers": 4000, "repeat": 3}
 
 

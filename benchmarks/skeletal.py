@@ -23,16 +23,16 @@ from posefix.mesh.geometry import bbox_diagonal
 from posefix.mesh.intersections import intersecting_faces, self_intersecting_pairs
 from posefix.workflow import demo
 from posefix.io.meshes import read_mesh
-from posefix.skeletal.rig_files import read_rig
-from posefix.skeletal.authoring import SkeletalPoser, union_error
-from posefix.skeletal.flow import MedialBallFlow
-from posefix.skeletal.rig import Rig, pose_from_rotation_vectors
-from posefix.skeletal.skeletal_mesh import skeletal_mesh
+from posefix.medial.rig_files import read_rig
+from posefix.medial.authoring import SkeletalPoser, union_error
+from posefix.medial.flow import MedialBallFlow
+from posefix.medial.rig import Rig, pose_from_rotation_vectors
+from posefix.medial.skeletal_mesh import skeletal_mesh
 
 ROOT = Path(__file__).resolve().parents[1]
 DATA = Path(os.environ.get("POSEFIX_DATA", ROOT.parent / "shared" / "data"))
 S1 = {"ssd": (20.2, 2.3), "variational": (3.8, 2.9), "flow": (0.2, None)}  # Fig. 13: eps, seconds (P4 1.7 GHz)
-CONFIG = yaml.safe_load((ROOT / "config.yaml").read_text())["skeletal_pose"]
+CONFIG = yaml.safe_load((ROOT / "config.yaml").read_text())["medial"]["pose"]
 MARGIN, NEIGHBOURS = CONFIG["margin"], CONFIG["neighbours"]
 REFERENCES = {"lion": "lion-poses/lion-reference.obj", "cat": "cat-poses/cat-reference.obj",
               "horse": "horse-poses/horse-reference.obj", "camel": "camel-poses/camel-reference.obj.gz",

@@ -15,17 +15,22 @@ from posefix.workflow.partial_summary import finished_poses, partial_pack, parti
 from posefix.workflow.plan import (exclude_options, exit_on_input_error, figure_report, job_files, library,
                                    memory_limit_mb, pose_list, read_reference_vertices, repair_folders,
                                    repaired_container_files, report_targets, summary_poses)
-from posefix.workflow.config_check import config_problems, folder_problems, typed_by_schema
+from posefix.workflow.config_check import config_problems, folder_problems, renamed_config, typed_by_schema
 from posefix.workflow.files import package_folder
 from posefix.workflow.fingerprint import CodeFingerprints
 from posefix.io.containers import member_digests
 from posefix.workflow.locks import clear_stale_locks
 from posefix.workflow.memory import memory_problem, stage_memory_mb
 from posefix.workflow.resources import available_memory, device_problems
-from posefix.report.contents import POSE_FIGURES, TIMED_STAGES, VIEWER_FILES
+from posefix.report.contents import COMPARED_REPAIRS, POSE_FIGURES, TIMED_STAGES, VIEWER_FILES
 
 
 SCHEMA = yaml.safe_load((Path(workflow.basedir) / "schemas" / "config.schema.yaml").read_text())
+_renamed, _notices = renamed_config(config)  # the keys renamed in 2026-12, read for one release
+config.clear()
+config.update(_renamed)
+for _notice in _notices if workflow.is_main_process else ():
+    print(_notice, file=sys.stderr)
 config.update(typed_by_schema(dict(config), SCHEMA))  # --config leaves text inside nested values
 _problems = config_problems(config, SCHEMA)
 if _problems:  # one line per problem, naming the key; no schema dump
@@ -118,8 +123,8 @@ _unwritable = folder_problems(config, LIBRARY.name) if workflow.is_main_process 
 if _unwritable:  # before anything runs (Snakemake itself would stop where the first file is written there)
     sys.exit("\n".join(f"posefix: error: config: {p}" for p in _unwritable))
 IS_DEMO = config["library"] is None
-BASELINES = config["baselines"]  # repairs beside S0, compared in the report
-BASELINE_CHOICES = ("medial", "volumetric", "contact")  # stage repair_<name> writes results/<library>/<pose>/<name>.h5
+REPAIRS = config["repairs"]  # the repairs run beside space-time, compared in the report
+REPAIR_CHOICES = COMPARED_REPAIRS  # stage repair_<name> writes results/<library>/<pose>/<name>.h5
 
 
 # Memory this run may use (MB): the user's --resources mem_mb; in a local run without it, the memory available now,
@@ -161,13 +166,13 @@ def memory_mb(stage):
     return lambda wildcards: within_limit(stage_memory_mb(stage, reference_vertices()))
 
 
-def baseline_artifacts(pose):
-    """The artifacts of the baseline repairs of ``pose``: {name: results/<library>/<pose>/<name>.h5}."""
-    return {name: f"{RESULTS}/{pose}/{name}.h5" for name in BASELINES}
+def repair_artifacts(pose):
+    """The artifacts of the other repairs of ``pose``: {name: results/<library>/<pose>/<name>.h5}."""
+    return {name: f"{RESULTS}/{pose}/{name}.h5" for name in REPAIRS}
 
 
-def baseline_repaired_file(name, pose):
-    """Output path of a baseline's repaired mesh: results/<library>/repaired-<name>/<pose><input suffix>."""
+def other_repaired_file(name, pose):
+    """Output path of another repair's repaired mesh: results/<library>/repaired-<name>/<pose><input suffix>."""
     return f"{RESULTS}/repaired-{name}/{pose}{WHOLE_LIBRARY.pose(pose).suffix}"
 
 
@@ -211,7 +216,7 @@ def _out_of_date(required):
 def summary_inputs(pose):
     """The files of ``pose`` that the library's summary reads (the pose has finished when they all exist)."""
     return ([f"{RESULTS}/{pose}/{a}.h5" for a in ("keyframes", "classify", "verify", "downstream")]
-            + list(baseline_artifacts(pose).values()) + [repaired_file(pose)])
+            + list(repair_artifacts(pose).values()) + [repaired_file(pose)])
 
 
 def _earlier_finished():
@@ -226,12 +231,12 @@ SUMMARY_POSES = summary_poses(config["poses"] and POSES, [p.name for p in WHOLE_
 
 def repaired_containers():
     """For a container library: each repair's file, results/<library>/repaired[-<repair>]/<file name> (rule pack)."""
-    return repaired_container_files(RESULTS, LIBRARY.container, BASELINES)
+    return repaired_container_files(RESULTS, LIBRARY.container, REPAIRS)
 
 
 def get_final_output():
     """The targets: each repair's mesh of every pose (and container file), and the report (plan.report_targets)."""
-    meshes = [repaired_file(p) for p in POSES] + [baseline_repaired_file(b, p) for b in BASELINES for p in POSES]
+    meshes = [repaired_file(p) for p in POSES] + [other_repaired_file(b, p) for b in REPAIRS for p in POSES]
     return [*meshes, *repaired_containers(), *report_targets(REPORTS, POSES, list(POSE_FIGURES))]
 
 
@@ -243,7 +248,7 @@ def _finished(required):
 def partial_summary(errors):
     """After a failed run: the report of the poses that finished, the others listed with their error line."""
     poses = _finished({p: summary_inputs(p) for p in SUMMARY_POSES})
-    partial_report(stage_script, (RESULTS, REPORTS), poses, errors, (BASELINES, config["summary"]["distortion_limit"]))
+    partial_report(stage_script, (RESULTS, REPORTS), poses, errors, (REPAIRS, config["summary"]["distortion_limit"]))
 
 
 def container_flags():
@@ -253,6 +258,6 @@ def container_flags():
 
 def partial_containers():
     """After a failed run of a container library: each repair's file, with the poses that finished repaired."""
-    for folder in repair_folders(RESULTS, BASELINES) if LIBRARY.container else ():
+    for folder in repair_folders(RESULTS, REPAIRS) if LIBRARY.container else ():
         done = _finished({p: [f"{folder}/{p}.ply"] for p in SUMMARY_POSES})[0]
         partial_pack(stage_script("pack"), LIBRARY, folder, done, len(SUMMARY_POSES))

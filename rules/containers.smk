@@ -1,6 +1,6 @@
 # A pose library in one USD or glTF file (config library=character.usd): each pose unpacked into a mesh file under
 # results/<library>/poses/ for the stages, and the repaired poses of every repair packed back into the same kind of
-# file, results/<library>/repaired[-<baseline>]/<file name>. The rules exist only for such a library. A pose is
+# file, results/<library>/repaired[-<repair>]/<file name>. The rules exist only for such a library. A pose is
 # unpacked again (and so repaired again) only when its points or the faces change in the file.
 
 
@@ -38,7 +38,7 @@ if LIBRARY.container:
         output:
             f"{RESULTS}/{{repair}}/{os.path.basename(LIBRARY.container)}",
         wildcard_constraints:
-            repair="repaired(-(" + "|".join(BASELINE_CHOICES) + "))?",
+            repair="repaired(-(" + "|".join(REPAIR_CHOICES) + "))?",
         params:
             container=lambda wildcards: container_flags(),
             folder=lambda wildcards, output: os.path.dirname(output[0]),

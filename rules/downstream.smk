@@ -1,15 +1,15 @@
 # Per pose: the downstream Gauss-Newton discrete-shell check (S0 §5, posefix.downstream), parallel to
-# export and render, so it adds no level to the per-pose chain. With downstream.baselines, also
-# towards the baseline repairs' poses (config baselines).
-CHECK_BASELINES = config["downstream"]["baselines"]
+# export and render, so it adds no level to the per-pose chain. With downstream.repairs, also
+# towards the other repairs' poses (config repairs).
+CHECK_REPAIRS = config["downstream"]["repairs"]
 
 
 rule downstream:
     input:
         keyframes=rules.keyframes.output[0],
         verify=rules.verify.output[0],
-        baselines=lambda wildcards: (
-            list(baseline_artifacts(wildcards.pose).values()) if CHECK_BASELINES else []
+        repairs=lambda wildcards: (
+            list(repair_artifacts(wildcards.pose).values()) if CHECK_REPAIRS else []
         ),
     output:
         h5=f"{RESULTS}/{{pose}}/downstream.h5",
@@ -21,9 +21,9 @@ rule downstream:
             labels={"pose": "{pose}", "figure": "Gauss-Newton check"},
         ),
     params:
-        options=config_flags(config["downstream"], skip=("threads", "baselines")),
-        baselines=lambda wildcards: (
-            named_options("--baseline", baseline_artifacts(wildcards.pose)) if CHECK_BASELINES else ""
+        options=config_flags(config["downstream"], skip=("threads", "repairs")),
+        repairs=lambda wildcards: (
+            named_options("--repair", repair_artifacts(wildcards.pose)) if CHECK_REPAIRS else ""
         ),
         script=stage_script("downstream"),
         code=stage_code("downstream"),
@@ -34,5 +34,5 @@ rule downstream:
     conda: "../envs/posefix.yaml"
     shell:
         "python {params.script:q} --keyframes {input.keyframes:q} --verify {input.verify:q}"
-        " {params.options} {params.baselines} --threads {threads} --out {output.h5:q} --png {output.png:q} --pose {wildcards.pose:q}"
+        " {params.options} {params.repairs} --threads {threads} --out {output.h5:q} --png {output.png:q} --pose {wildcards.pose:q}"
         " --log {log:q}"

@@ -1,14 +1,14 @@
 # Reports: the summary of a library, the figures per pose, the overview and the 3D viewer (posefix.report), S0
-# compared with the baseline repairs of config baselines. Captions of the report() outputs are in
+# compared with the other repairs of config repairs. Captions of the report() outputs are in
 # rules/captions/.
 
 rule summary:
     input:
         verify=expand(f"{RESULTS}/{{pose}}/verify.h5", pose=POSES),
         downstream=expand(f"{RESULTS}/{{pose}}/downstream.h5", pose=POSES),
-        classify=expand(f"{RESULTS}/{{pose}}/classify.h5", pose=POSES),  # V_C of the baselines' deviations
+        classify=expand(f"{RESULTS}/{{pose}}/classify.h5", pose=POSES),  # V_C of the other repairs' deviations
         keyframes=expand(f"{RESULTS}/{{pose}}/keyframes.h5", pose=POSES),  # reference and target: distortion
-        baselines=[path for p in POSES for path in baseline_artifacts(p).values()],
+        repairs=[path for p in POSES for path in repair_artifacts(p).values()],
         meshes=[repaired_file(p) for p in POSES],
     output:
         json=f"{REPORTS}/summary.json",
@@ -16,7 +16,7 @@ rule summary:
     params:
         results=lambda wildcards, input: os.path.dirname(os.path.dirname(input.verify[0])),
         poses=",".join(SUMMARY_POSES),  # with the poses an earlier run finished
-        baselines=f"--baselines {','.join(BASELINES)}" if BASELINES else "",
+        repairs=f"--repairs {','.join(REPAIRS)}" if REPAIRS else "",
         limit=config["summary"]["distortion_limit"],
         script=stage_script("summary"),
         code=stage_code("summary"),
@@ -26,7 +26,7 @@ rule summary:
     conda: "../envs/posefix.yaml"
     shell:
         "python {params.script:q} --results {params.results:q} --poses {params.poses:q}"
-        " {params.baselines} --distortion-limit {params.limit} --out {output.json:q} --markdown {output.md:q}"
+        " {params.repairs} --distortion-limit {params.limit} --out {output.json:q} --markdown {output.md:q}"
         " --log {log:q}"
 
 
@@ -37,13 +37,13 @@ rule render:
         fit=rules.fit.output[0],
         verify=rules.verify.output[0],
         benchmarks=[f"{RESULTS}/benchmarks/{{pose}}/{stage}.tsv" for stage in TIMED_STAGES],
-        baselines=lambda wildcards: list(baseline_artifacts(wildcards.pose).values()),
+        repairs=lambda wildcards: list(repair_artifacts(wildcards.pose).values()),
     output:
         [pose_figure(figure) for figure in POSE_FIGURES],
     params:
         folder=lambda wildcards, output: os.path.dirname(output[0]),
         benchmarks=lambda wildcards, input: os.path.dirname(input.benchmarks[0]),
-        baselines=lambda wildcards: named_options("--baseline", baseline_artifacts(wildcards.pose)),
+        repairs=lambda wildcards: named_options("--repair", repair_artifacts(wildcards.pose)),
         limit=config["summary"]["distortion_limit"],
         script=stage_script("render"),
         code=stage_code("render"),
@@ -55,7 +55,7 @@ rule render:
     shell:
         "python {params.script:q} --keyframes {input.keyframes:q} --classify {input.classify:q}"
         " --fit {input.fit:q} --verify {input.verify:q} --benchmarks {params.benchmarks:q}"
-        " {params.baselines} --distortion-limit {params.limit} --pose {wildcards.pose:q} --out {params.folder:q}"
+        " {params.repairs} --distortion-limit {params.limit} --pose {wildcards.pose:q} --out {params.folder:q}"
         " --log {log:q}"
 
 
@@ -93,7 +93,7 @@ rule viewer:
         keyframes=expand(f"{RESULTS}/{{pose}}/keyframes.h5", pose=POSES),
         classify=expand(f"{RESULTS}/{{pose}}/classify.h5", pose=POSES),
         verify=expand(f"{RESULTS}/{{pose}}/verify.h5", pose=POSES),
-        baselines=[path for p in POSES for path in baseline_artifacts(p).values()],
+        repairs=[path for p in POSES for path in repair_artifacts(p).values()],
         page=VIEWER_PAGE,  # the page's template, script and three.js: a changed page rebuilds it
     output:
         report(

@@ -1,5 +1,5 @@
-# Per pose: verification and repair of the integrated pose (posefix.verify), and the repaired mesh
-# in the target's format.
+# Per pose: verification and repair of the integrated pose (posefix.verify), and the repaired meshes (space-time's
+# and the other repairs') in the target's format.
 
 rule verify:
     input:
@@ -11,7 +11,7 @@ rule verify:
         f"{RESULTS}/{{pose}}/verify.h5",
     params:
         options=config_flags(config["verify"]),
-        contact=config_flags(config["contact"]),
+        contact=config_flags(config["contact"], skip=("repair",)),
         script=stage_script("verify"),
         code=stage_code("verify"),
     threads: config["verify"]["threads"]
@@ -46,3 +46,26 @@ rule export:
         "python {params.script:q} --artifact {input.verify:q} --reference {input.reference:q}"
         " --target {input.target:q}"
         " --out {output:q} --log {log:q}"
+
+
+rule export_repair:
+    input:
+        artifact=f"{RESULTS}/{{pose}}/{{repair}}.h5",
+        reference=LIBRARY.reference.path,
+        target=pose_file,
+    output:
+        f"{RESULTS}/repaired-{{repair}}/{{pose}}{{suffix}}",
+    wildcard_constraints:
+        repair="|".join(REPAIR_CHOICES),
+        suffix=r"\.(obj|ply|off)(\.gz)?",
+    params:
+        script=stage_script("export"),
+        code=stage_code("export"),
+    threads: 1
+    resources: mem_mb=memory_mb("export_repair")
+    log: log_file("export_{repair}{suffix}")
+    benchmark: benchmark_file("export_{repair}{suffix}")
+    conda: "../envs/posefix.yaml"
+    shell:
+        "python {params.script:q} --artifact {input.artifact:q} --stage repair_{wildcards.repair}"
+        " --reference {input.reference:q} --target {input.target:q} --out {output:q} --log {log:q}"

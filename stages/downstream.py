@@ -4,7 +4,7 @@ Runs the example-driven discrete-shell deformation (Fröhlich & Botsch 2011; Gau
 ``posefix.downstream``) from the reference towards the original target and towards the repaired pose,
 for every stiffness k_b in ``--k-bend`` and weight alpha in ``--alphas`` (one setting by default;
 ``make bench`` runs the grid ``posefix.downstream.check.GRID``, as single settings are fragile). The same three far-apart handle vertices are pinned at their linear blend in every
-run; every ``--baseline`` repair is a further example, checked over the same grid. Writes per-run
+run; every ``--repair`` is a further example, checked over the same grid. Writes per-run
 iterations, convergence, stop reason and the error after every iteration, and (``--png``) a figure
 of the energy per iteration (``posefix.report.figures.downstream_history``). With ``--threads`` N, N
 runs at a time (processes of one thread each; the same iterations and stop reasons).
@@ -14,7 +14,7 @@ import posefix.workflow.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; r
 
 from posefix.downstream.check import downstream_check
 from posefix.downstream.gauss_newton import STOP_REASONS, SolverSettings
-from posefix.io.artifacts import read_artifact, read_baseline, write_artifact
+from posefix.io.artifacts import read_artifact, read_repair, write_artifact
 from posefix.workflow.cli import float_list, library_defaults, named_path, run_stage, stage_parser
 from posefix.io.files import write_figure
 from posefix.workflow.timings import Timings
@@ -48,8 +48,8 @@ def build_parser():
     parser.add_argument("--out", required=True, help="downstream.h5 to write")
     parser.add_argument("--png", default=None, help="also draw the energy per iteration of every run into this PNG")
     parser.add_argument("--pose", default="", help="pose name (figure title)")
-    parser.add_argument("--baseline", type=named_path, action="append", default=[], metavar="NAME=PATH",
-                        help="a baseline repair's artifact (e.g. medial=<pose>/medial.h5): also deform towards its "
+    parser.add_argument("--repair", type=named_path, action="append", default=[], metavar="NAME=PATH",
+                        help="another repair's artifact (e.g. medial=<pose>/medial.h5): also deform towards its "
                         "repaired pose; repeatable")
     parser.add_argument("--alphas", type=float_list, default=list(grid["alphas"]),
                         help="interpolation weights, e.g. 0.5,1.0")
@@ -70,7 +70,7 @@ def main(args, log):
         kf, _ = read_artifact(args.keyframes, "keyframes", ["reference", "target", "faces"])
         ve, _ = read_artifact(args.verify, "verify", ["repaired"])
         examples = {"original": kf["target"], "repaired": ve["repaired"]}
-        examples |= {name: read_baseline(path, name, ["repaired"])[0]["repaired"] for name, path in args.baseline}
+        examples |= {name: read_repair(path, name, ["repaired"])[0]["repaired"] for name, path in args.repair}
     settings = SolverSettings(max_iters=args.max_iters, rel_tol=args.rel_tol, stall_iters=args.stall_iters)
     with timings.step("solve"):
         check = downstream_check(kf["reference"], kf["faces"], examples, args.alphas, args.k_bend, args.k_stretch,
@@ -78,8 +78,8 @@ def main(args, log):
     write_artifact(args.out, "downstream", check.datasets(),
                    params={"alphas": args.alphas, "k_bend": args.k_bend, "k_stretch": args.k_stretch,
                            "max_iters": args.max_iters, "rel_tol": args.rel_tol, "stall_iters": args.stall_iters,
-                           "baselines": [name for name, _ in args.baseline]},
-                   inputs=[args.keyframes, args.verify, *(path for _, path in args.baseline)], timings=timings,
+                           "baselines": [name for name, _ in args.repair]},
+                   inputs=[args.keyframes, args.verify, *(path for _, path in args.repair)], timings=timings,
                    metrics=check.metrics(), docs=DOCS)
     if args.png:
         title = f"{args.pose}: Gauss-Newton discrete shells"

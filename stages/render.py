@@ -1,6 +1,6 @@
 """Stage render: the report figures of one pose (PNG, offscreen).
 
-Writes into ``--out``: ``renders.png`` (target vs repaired, and every ``--baseline`` repair beside
+Writes into ``--out``: ``renders.png`` (target vs repaired, and every ``--repair`` beside
 them, intersecting and distorted faces highlighted),
 ``deviation.png`` (deviation heat map on the repaired pose with a colour bar, fallback regions),
 ``classification.png`` (intersecting faces per key frame before and after, ``V_C`` on the
@@ -16,12 +16,12 @@ import posefix.workflow.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; r
 
 from posefix.mesh.distortion import distorted_faces, distortion_summary
 from posefix.mesh.intersections import intersecting_faces, self_intersecting_pairs
-from posefix.io.artifacts import read_artifact, read_baseline
+from posefix.io.artifacts import read_artifact, read_repair
 from posefix.workflow.cli import library_defaults, named_path, run_stage, stage_parser
 from posefix.io.files import write_figure
 from posefix.workflow.timings import Timings, benchmark_seconds
 from posefix.report import figures
-from posefix.report.contents import POSE_FIGURES, TIMED_STAGES
+from posefix.report.contents import POSE_FIGURES, SPACETIME, TIMED_STAGES
 from posefix.report.rasterizer import camera
 from posefix.spacetime.classification import split_frames
 
@@ -37,8 +37,8 @@ def build_parser():
     parser.add_argument("--benchmarks", required=True, help="folder of the pose's Snakemake benchmark files")
     parser.add_argument("--pose", required=True, help="pose name (figure titles)")
     parser.add_argument("--out", required=True, help="folder to write the PNG files into")
-    parser.add_argument("--baseline", type=named_path, action="append", default=[], metavar="NAME=PATH",
-                        help="a baseline repair's artifact (e.g. medial=<pose>/medial.h5), drawn beside the repaired "
+    parser.add_argument("--repair", type=named_path, action="append", default=[], metavar="NAME=PATH",
+                        help="another repair's artifact (e.g. medial=<pose>/medial.h5), drawn beside the repaired "
                         "pose in renders.png; repeatable")
     parser.add_argument("--distortion-limit", type=float, default=library_defaults(distortion_summary)["limit"],
                         help="faces whose edge-length or area ratio exceeds this against both the target and the "
@@ -53,7 +53,7 @@ def main(args, log):
         cl, _ = read_artifact(args.classify, "classify", ["mask", "pairs", "pair_offsets", "intersecting_faces"])
         fi, fattrs = read_artifact(args.fit, "fit", [f"history/{k}" for k in HISTORY])
         ve, _ = read_artifact(args.verify, "verify", ["repaired", "deviation", "replaced", "pairs", "new_faces"])
-        compared = {name: read_baseline(path, name, ["repaired"])[0]["repaired"] for name, path in args.baseline}
+        compared = {name: read_repair(path, name, ["repaired"])[0]["repaired"] for name, path in args.repair}
     V_ref, V_tgt, F = kf["reference"], kf["target"], kf["faces"]
     m = len(F)
     frame_pairs = split_frames(cl["pairs"], cl["pair_offsets"])
@@ -66,7 +66,7 @@ def main(args, log):
     R = camera(V_ref)
     made = {}
     with timings.step("figures"):
-        poses = {"target": (V_tgt, target_faces), "space-time" if baselines else "repaired": (ve["repaired"],
+        poses = {"target": (V_tgt, target_faces), SPACETIME if baselines else "repaired": (ve["repaired"],
                                                                                              repaired_faces)}
         made["renders"] = figures.renders(F, R, poses | baselines, reference_faces, args.pose, distorted)
         made["deviation"] = figures.deviation_map(ve["repaired"], F, R, ve["deviation"], ve["replaced"],

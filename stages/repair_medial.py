@@ -2,7 +2,7 @@
 
 Carries the reference's medial balls (stage skeleton) into the target, rebuilds the damaged region on
 them and runs the medial-ball flow (S1 §4) until no new self-intersection remains (intersections the reference
-has too do not count) or ``--max-iters``. See ``posefix.skeletal.repair``.
+has too do not count) or ``--max-iters``. See ``posefix.medial.repair``.
 """
 
 import posefix.workflow.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; runtime defaults before numpy)
@@ -13,7 +13,7 @@ from posefix.workflow.cli import library_defaults, run_stage, stage_parser
 from posefix.io.errors import InputError
 from posefix.io.library import read_welded_pair
 from posefix.workflow.timings import Timings
-from posefix.skeletal.repair import MedialRepair
+from posefix.medial.repair import MedialRepair
 
 DOCS = {
     "start": ("length", "the target pose, (n, 3) float64"),

@@ -21,10 +21,10 @@ from posefix.io.artifacts import write_artifact
 from posefix.workflow.cli import library_defaults, run_stage, stage_parser
 from posefix.io.library import read_reference
 from posefix.io.meshes import mesh_file, write_like
-from posefix.skeletal.rig_files import read_rig
+from posefix.medial.rig_files import read_rig
 from posefix.workflow.skeleton_options import add_skeleton_options, reference_skeleton
 from posefix.workflow.timings import Timings
-from posefix.skeletal.authoring import VARIANTS, SkeletalPoser, union_error
+from posefix.medial.authoring import VARIANTS, SkeletalPoser, union_error
 
 DOCS = {
     "skeleton/S": ("length", "skeletal mesh vertices (medial-ball centres), (n, 3) float64"),

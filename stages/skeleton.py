@@ -1,7 +1,7 @@
 """Stage skeleton: the skeletal mesh of the reference (S1 §2: medial-ball centres S and radii R), once per library.
 
 The medial repair (stage repair_medial) carries these balls into every target pose. See
-``posefix.skeletal.skeletal_mesh``.
+``posefix.medial.skeletal_mesh``.
 """
 
 import posefix.workflow.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; runtime defaults before numpy)

@@ -2,7 +2,7 @@
 
 Reads the metrics of every pose's artifacts (``results/<library>/<pose>/*.h5``) and the Snakemake
 benchmark files, and writes ``reports/<library>/summary.json`` (schema in docs/artifacts.md) and
-``summary.md`` (``posefix.report.summary``). With ``--baselines``, every pose's entry also compares
+``summary.md`` (``posefix.report.summary``). With ``--repairs``, every pose's entry also compares
 the baseline repairs (``<pose>/<name>.h5``): their intersections, and their deviation from the
 target over space-time's ``V_C`` (``classify.h5``) and the rest, measured as space-time's. Every repaired pose's distortion
 (worst edge-length and face-area ratios against the target and the reference, faces beyond
@@ -15,14 +15,14 @@ from pathlib import Path
 
 import posefix.workflow.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; runtime defaults before numpy)
 
-from posefix.io.artifacts import read_artifact, read_baseline
+from posefix.io.artifacts import read_artifact, read_repair
 from posefix.mesh.distortion import distortion_summary
 from posefix.workflow.cli import library_defaults, named_path, run_stage, stage_parser
 from posefix.io.errors import InputError
 from posefix.io.files import atomic_write_bytes
 from posefix.workflow.timings import benchmark_seconds
 from posefix.verify.deviation import deviation
-from posefix.report.summary import DOWNSTREAM_DATASETS, SUMMARY_STAGES, baseline_entry, pose_entry, summary_markdown
+from posefix.report.summary import DOWNSTREAM_DATASETS, SUMMARY_STAGES, repair_entry, pose_entry, summary_markdown
 
 METRICS = ("keyframes", "fit", "integrate", "verify")
 
@@ -33,8 +33,8 @@ def build_parser():
     parser.add_argument("--poses", required=True, help="comma-separated pose names")
     parser.add_argument("--out", required=True, help="summary.json to write")
     parser.add_argument("--markdown", required=True, help="summary.md to write")
-    parser.add_argument("--baselines", default="",
-                        help="comma-separated baseline repairs to compare (their <pose>/<name>.h5), e.g. medial")
+    parser.add_argument("--repairs", default="",
+                        help="comma-separated other repairs to compare (their <pose>/<name>.h5), e.g. medial")
     parser.add_argument("--failed", type=named_path, action="append", default=[], metavar="POSE=ERROR",
                         help="a pose that did not finish and its error line (listed apart; the run failed)")
     parser.add_argument("--distortion-limit", type=float, default=library_defaults(distortion_summary)["limit"],
@@ -58,7 +58,7 @@ def summarize_pose(results, pose, baselines=(), limit=4.0):
     if baselines:
         mask = read_artifact(folder / "classify.h5", "classify", ["mask"])[0]["mask"].astype(bool)
         d = float(metrics["keyframes"]["bbox_diagonal"])
-        compared = {name: summarize_baseline(folder / f"{name}.h5", name, mask, d, downstream, measure)
+        compared = {name: summarize_repair(folder / f"{name}.h5", name, mask, d, downstream, measure)
                     for name in baselines}
         for name, entry in compared.items():  # wall seconds of the stage, as space-time's (the artifact's: in-process)
             wall = benchmark_seconds(Path(results) / "benchmarks" / pose, f"repair_{name}")
@@ -66,21 +66,21 @@ def summarize_pose(results, pose, baselines=(), limit=4.0):
     return pose_entry(pose, metrics, downstream, seconds, compared, measure(repaired))
 
 
-def summarize_baseline(path, name, mask, d, downstream, measure):
+def summarize_repair(path, name, mask, d, downstream, measure):
     """``baselines.<name>`` of a pose's entry: the artifact's metrics, the deviation of its repaired pose from
     its start (the target) over ``mask`` (V_C) and the rest relative to ``d``, the downstream runs towards it,
     ``measure`` (its distortion summary) of the repaired pose."""
-    data, attrs = read_baseline(path, name, ["start", "repaired"])
+    data, attrs = read_repair(path, name, ["start", "repaired"])
     if not data["start"].shape == data["repaired"].shape == (len(mask), 3):
         raise InputError(path, f"start {data['start'].shape} and repaired {data['repaired'].shape} are not "
                                f"({len(mask)}, 3) like the pose")
     _, summary = deviation(data["repaired"], data["start"], mask, d)
-    return baseline_entry(name, attrs["metrics"], summary, downstream, measure(data["repaired"]))
+    return repair_entry(name, attrs["metrics"], summary, downstream, measure(data["repaired"]))
 
 
 def main(args, log):
     poses = [p for p in args.poses.split(",") if p]
-    baselines = [b for b in args.baselines.split(",") if b]
+    baselines = [b for b in args.repairs.split(",") if b]
     entries = [summarize_pose(args.results, pose, baselines, args.distortion_limit) for pose in poses]
     library = Path(args.results).name
     failed = [{"pose": pose, "error": error} for pose, error in args.failed]

@@ -15,13 +15,13 @@ import posefix.workflow.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; r
 
 import numpy as np
 
-from posefix.io.artifacts import read_artifact, read_baseline
+from posefix.io.artifacts import read_artifact, read_repair
 from posefix.io.errors import InputError
 from posefix.io.files import atomic_write_bytes
 from posefix.mesh.distortion import distorted_faces, distortion_summary
 from posefix.mesh.intersections import intersecting_faces, self_intersecting_pairs
-from posefix.report.contents import VIEWER_FILES
-from posefix.report.tables import baseline_names, entry_status
+from posefix.report.contents import SPACETIME, VIEWER_FILES
+from posefix.report.tables import repair_names, entry_status
 from posefix.report.viewer import mesh_record, page_data, pose_record, viewer_html
 from posefix.spacetime.classification import split_frames
 from posefix.workflow.cli import library_defaults, run_stage, stage_parser
@@ -62,9 +62,9 @@ def read_pose(folder, baselines, reference):
     ve, _ = read_artifact(folder / "verify.h5", "verify", ["repaired", "deviation", "replaced", "pairs"])
     F, m = kf["faces"], len(kf["faces"])
     frames = split_frames(cl["pairs"], cl["pair_offsets"])
-    repairs = {"space-time": (ve["repaired"], intersecting_faces(ve["pairs"], m))}
+    repairs = {SPACETIME: (ve["repaired"], intersecting_faces(ve["pairs"], m))}
     for name in baselines:
-        X = read_baseline(folder / f"{name}.h5", name, ["repaired"])[0]["repaired"]
+        X = read_repair(folder / f"{name}.h5", name, ["repaired"])[0]["repaired"]
         if X.shape != kf["target"].shape:
             raise InputError(folder / f"{name}.h5", f"repaired {X.shape}, the pose has {kf['target'].shape}")
         repairs[name] = (X, intersecting_faces(self_intersecting_pairs(X, F), m))
@@ -77,7 +77,7 @@ def main(args, log):
     library, entries = read_summary(args.summary)
     if not entries:
         raise InputError(args.summary, "lists no pose")
-    baselines, reference, bounds, poses = baseline_names(entries), None, [], []
+    baselines, reference, bounds, poses = repair_names(entries), None, [], []
     for entry in entries:
         target, repairs, kf, cl, ve, attrs = read_pose(Path(args.results) / entry["pose"], baselines, reference)
         reference = (kf["reference"], kf["faces"], kf["reference_hit"], float(attrs["metrics"]["bbox_diagonal"]))

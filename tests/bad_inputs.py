@@ -199,7 +199,7 @@ CONFIG = [
     for entry, line in [
         ("fit.batch=0", "fit.batch: 0 is less than the minimum of 1"),
         ("verify.finish=rigid", "verify.finish: 'rigid' is not one of 'contact', 'snap'"),
-        ("baselines=[medial,shape]", "baselines.1: 'shape' is not one of 'medial', 'volumetric', 'contact'"),
+        ("repairs=[medial,shape]", "baselines.1: 'shape' is not one of 'medial', 'volumetric', 'contact'"),
         ("downstream.alphas=abc", "downstream.alphas.0: 'abc' is not of type number"),
         ("fitt.batch=64", "fitt: unknown key (did you mean 'fit'?)"),
         ("fit.eps_rel=-1", "fit.eps_rel: -1.0 is less than the minimum of 0"),
@@ -270,7 +270,7 @@ ENVIRONMENT = [
     BadInput("environment", "integrate on a GPU that is absent",
              "posefix: error: config: integrate.device: gpu requested but no gpu OpenCL device with float64 support "
              "(auto falls back to numpy)",
-             args=("repair", "{lib}", "--config", "integrate.device=gpu", "baselines=[]")),
+             args=("repair", "{lib}", "--config", "integrate.device=gpu", "repairs=[]")),
 ]
 
 CASES = FILES + LIBRARY + CONFIG + COMMAND_LINE + ENVIRONMENT

@@ -15,15 +15,18 @@ pytestmark = pytest.mark.pipeline
 def repair_options(name):
     """The target and config of the repair of authored library ``name``: S0 alone (the session's demo run checks
     the baseline repairs) up to the summary, with one downstream step (no figures, no viewer)."""
-    return f"reports/{name}/summary.json", "--config", "baselines=[]", "downstream={'max_iters': 1}"
+    return f"reports/{name}/summary.json", "--config", "repairs=[]", "downstream={'max_iters': 1}"
 
 
 def test_author_a_library_from_the_demo_rig_and_repair_it(tmp_path):
     """`snakemake skeletal_pose` (S1: the demo rig -> <pose>-ssd/-variational/-flow), then the S0 repair of one of them.
-    Called by its name before 2026-12 (`author`), which still works for a release and says the new one."""
+    Called by its name before 2026-12 (`author`), with its config section's name before 2026-12 (`skeletal_pose`),
+    which still work for a release and say the new ones."""
     proc = snakemake(tmp_path, "author", "--config", "skeletal_pose={'max_iters': 20}")
     assert proc.returncode == 0, proc.stderr[-3000:]
     assert "posefix: rule 'author' is now 'skeletal_pose'" in proc.stderr
+    assert ("posefix: config key 'skeletal_pose' is now 'medial.pose and medial.skeleton' (the old key goes in the "
+            "next release)") in proc.stderr.splitlines()
     library = tmp_path / "data" / "authored" / "demo-limb"
     names = sorted(p.name for p in library.iterdir() if not p.name.startswith("."))  # and .snakemake_timestamp
     assert names[0] == "demo-01-flow.obj" and "demo-limb-reference.obj" in names and len(names) == 13
@@ -41,7 +44,7 @@ def test_author_a_library_from_the_demo_pose_script_and_repair_it(tmp_path):
     """`snakemake volumetric_pose` (S4: the demo pose script -> vol-bend, vol-fold, vol-twist), then the S0
     repair of the bent one (alone: the session's demo run checks the baseline repairs; the folded one, 525 faces
     intersecting, took 93 s of stages in a loaded run against the bent one's 15 s)."""
-    proc = snakemake(tmp_path, "volumetric_pose", "--config", "volumetric_pose={'tet_vertices': 400}")
+    proc = snakemake(tmp_path, "volumetric_pose", "--config", "volumetric={'pose': {'tet_vertices': 400}}")
     assert proc.returncode == 0, proc.stderr[-3000:]
     library = tmp_path / "data" / "authored" / "demo-limb-volumetric"
     names = sorted(p.name for p in library.iterdir() if not p.name.startswith("."))
@@ -58,7 +61,7 @@ def test_animate_a_library_from_the_demo_markers_and_repair_it(tmp_path):
     """`snakemake volumetric_animate` (S4 §3.2: 8 markers, 13 frames of the demo limb bending) gives a pose
     library of the reference's faces and vertex order that the repair workflow reads."""
     from posefix.io.meshes import read_mesh
-    proc = snakemake(tmp_path, "volumetric_animate", "--config", "volumetric_animate={'tet_vertices': 400}")
+    proc = snakemake(tmp_path, "volumetric_animate", "--config", "volumetric={'animate': {'tet_vertices': 400}}")
     assert proc.returncode == 0, proc.stderr[-3000:]
     library = tmp_path / "data" / "authored" / "demo-limb-markers"
     names = sorted(p.name for p in library.iterdir() if not p.name.startswith("."))

@@ -60,7 +60,7 @@ def test_bad_pose_files_each_give_their_one_line_and_the_good_poses_are_repaired
     lib = limb(tmp_path)
     for case in FILES:
         case.make(lib)
-    proc = posefix(["repair", str(lib), "--config", "baselines=[]"], tmp_path)
+    proc = posefix(["repair", str(lib), "--config", "repairs=[]"], tmp_path)
     lines = (proc.stdout + proc.stderr).splitlines()
     assert proc.returncode == 1 and "Traceback" not in proc.stderr, proc.stderr[-3000:]
     for case in FILES:

@@ -173,7 +173,7 @@ class BackgroundRun(threading.Thread):
     def _workflow(self):
         cmd = [sys.executable, "-m", "snakemake", "-s", ROOT / "Snakefile", "--directory", self.work,
                "--workflow-profile", PROFILE, *TEST_OPTIONS, *_node_options(self.env)]
-        cmd = cmd + ["--config", "baselines=[]"] + ([f"poses={POSES}"] if POSES != "all" else [])
+        cmd = cmd + ["--config", "repairs=[]"] + ([f"poses={POSES}"] if POSES != "all" else [])
         watch = _QueueWatch(self.env)
         watch.start()
         start = time.monotonic()

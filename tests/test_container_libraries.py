@@ -21,7 +21,7 @@ pytestmark = pytest.mark.pipeline
 POSES = ("demo-02", "demo-03")
 """The demo poses these runs repair (two, to keep the four runs short; 29 and 64 pairs of faces intersecting at 362
 vertices), with the contact repair beside S0."""
-RUN = ("baselines=[contact]", "downstream={'max_iters': 1}")
+RUN = ("repairs=[contact]", "downstream={'max_iters': 1}")
 """Their config: one downstream step (the repaired meshes do not depend on the check)."""
 BLENDER_PYTHON = ROOT / ".venv-blender" / "bin" / "python"
 """The bpy environment that reads and writes Alembic (the workflow finds it in the checkout)."""

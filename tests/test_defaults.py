@@ -23,12 +23,12 @@ from posefix.mesh.distortion import distortion_summary
 from posefix.workflow.demo import demo_library
 from posefix.verify.contact_finish import FinishSettings
 from posefix.verify.sequence import RepairSettings
-from posefix.skeletal.authoring import SkeletalPoser
-from posefix.skeletal.flow import MedialBallFlow, candidate_balls, medial_ball_flow, nearest_balls
-from posefix.skeletal.reconstruction import SkeletalReconstruction, collapsed_faces, frame_maps
-from posefix.skeletal.repair import MedialRepair, medial_repair
-from posefix.skeletal.rig import skinning_weights
-from posefix.skeletal.skeletal_mesh import skeletal_mesh
+from posefix.medial.authoring import SkeletalPoser
+from posefix.medial.flow import MedialBallFlow, candidate_balls, medial_ball_flow, nearest_balls
+from posefix.medial.reconstruction import SkeletalReconstruction, collapsed_faces, frame_maps
+from posefix.medial.repair import MedialRepair, medial_repair
+from posefix.medial.rig import skinning_weights
+from posefix.medial.skeletal_mesh import skeletal_mesh
 from posefix.spacetime.classification import constraint_mask
 from posefix.volumetric.authoring import VolumetricPoser
 from posefix.volumetric.fill import VolumetricFill
@@ -42,6 +42,19 @@ from posefix.spacetime.keyframes import keyframes, prepare
 
 CONFIG = yaml.safe_load((ROOT / "config.yaml").read_text())
 SCHEMA = yaml.safe_load((ROOT / "schemas" / "config.schema.yaml").read_text())
+def leaf_sections(config, prefix=""):
+    """``{dotted section: {key: value}}`` of the settings in ``config`` (nested sections flattened), dict."""
+    out = {}
+    for name, value in config.items():
+        if isinstance(value, dict) and name not in ("exclude", "rigid"):
+            settings = {k: v for k, v in value.items() if not isinstance(v, dict) or k in ("exclude", "rigid")}
+            if settings:
+                out[prefix + name] = settings
+            out |= leaf_sections({k: v for k, v in value.items() if k not in settings}, f"{prefix}{name}.")
+    return out
+
+
+SECTIONS = leaf_sections(CONFIG)
 NONE = inspect.Parameter.empty
 
 
@@ -85,33 +98,33 @@ LIBRARY = {
     ("downstream", "max_iters"): [(SolverSettings, "max_iters", None)],
     ("downstream", "rel_tol"): [(SolverSettings, "rel_tol", None)],
     ("downstream", "stall_iters"): [(SolverSettings, "stall_iters", None)],
-    ("skeletal_pose", "medial"): [(skeletal_mesh, "medial", None)],
-    ("skeletal_pose", "tol"): [(skeletal_mesh, "tol", None)],
-    ("skeletal_pose", "smooth_iters"): [(skeletal_mesh, "smooth_iters", None)],
-    ("skeletal_pose", "smooth_step"): [(skeletal_mesh, "smooth_step", None)],
-    ("skeletal_pose", "falloff"): [(SkeletalPoser, "falloff", None), (skinning_weights, "falloff", None)],
-    ("skeletal_pose", "min_sine"): [(SkeletalPoser, "min_sine", None), (frame_maps, "min_sine", None)],
-    ("skeletal_pose", "min_area"): [(SkeletalPoser, "min_area", None), (SkeletalReconstruction, "min_area", None),
+    ("medial.skeleton", "medial"): [(skeletal_mesh, "medial", None)],
+    ("medial.skeleton", "tol"): [(skeletal_mesh, "tol", None)],
+    ("medial.skeleton", "smooth_iters"): [(skeletal_mesh, "smooth_iters", None)],
+    ("medial.skeleton", "smooth_step"): [(skeletal_mesh, "smooth_step", None)],
+    ("medial.pose", "falloff"): [(SkeletalPoser, "falloff", None), (skinning_weights, "falloff", None)],
+    ("medial.pose", "min_sine"): [(SkeletalPoser, "min_sine", None), (frame_maps, "min_sine", None)],
+    ("medial.pose", "min_area"): [(SkeletalPoser, "min_area", None), (SkeletalReconstruction, "min_area", None),
                                     (collapsed_faces, "min_area", None)],
-    ("skeletal_pose", "tau"): [(SkeletalPoser.author, "tau", None), (MedialBallFlow, "tau", None),
+    ("medial.pose", "tau"): [(SkeletalPoser.author, "tau", None), (MedialBallFlow, "tau", None),
                                (medial_ball_flow, "tau", None)],
-    ("skeletal_pose", "neighbours"): [(SkeletalPoser.author, "neighbours", None), (MedialBallFlow, "neighbours", None),
+    ("medial.pose", "neighbours"): [(SkeletalPoser.author, "neighbours", None), (MedialBallFlow, "neighbours", None),
                                       (medial_ball_flow, "neighbours", None), (nearest_balls, "neighbours", None),
                                       (candidate_balls, "neighbours", None)],
-    ("skeletal_pose", "max_iters"): [(SkeletalPoser.author, "max_iters", None), (MedialBallFlow.run, "max_iters", None),
+    ("medial.pose", "max_iters"): [(SkeletalPoser.author, "max_iters", None), (MedialBallFlow.run, "max_iters", None),
                                      (medial_ball_flow, "max_iters", None)],
-    **{("repair_medial", key): [(MedialRepair, key, None)]  # medial_repair passes them on
+    **{("medial.repair", key): [(MedialRepair, key, None)]  # medial_repair passes them on
        for key in ("tau", "neighbours", "max_reach")},
-    ("repair_medial", "max_iters"): [(MedialRepair.repair, "max_iters", None), (medial_repair, "max_iters", None)],
-    ("volumetric_pose", "tet_vertices"): [(tet_mesh, "surface_vertices", None)],
-    ("volumetric_pose", "iterations"): [(VolumetricPoser.pose, "iterations", None)],
-    ("volumetric_pose", "frames"): [(VolumetricPoser.pose, "frames", None)],
-    ("repair_volumetric", "tet_vertices"): [(tet_mesh, "surface_vertices", None)],
-    **{("repair_volumetric", key): [(VolumetricFill.repair, key, None)]
+    ("medial.repair", "max_iters"): [(MedialRepair.repair, "max_iters", None), (medial_repair, "max_iters", None)],
+    ("volumetric.pose", "tet_vertices"): [(tet_mesh, "surface_vertices", None)],
+    ("volumetric.pose", "iterations"): [(VolumetricPoser.pose, "iterations", None)],
+    ("volumetric.pose", "frames"): [(VolumetricPoser.pose, "frames", None)],
+    ("volumetric.repair", "tet_vertices"): [(tet_mesh, "surface_vertices", None)],
+    **{("volumetric.repair", key): [(VolumetricFill.repair, key, None)]
        for key in ("iterations", "point_weight", "max_rings", "max_free")},
-    ("volumetric_animate", "tet_vertices"): [(tet_mesh, "surface_vertices", None)],
-    ("volumetric_animate", "iterations"): [(MarkerAnimator.animate, "iterations", None)],
-    ("volumetric_animate", "first_iterations"): [(MarkerAnimator.animate, "first_iterations", None)],
+    ("volumetric.animate", "tet_vertices"): [(tet_mesh, "surface_vertices", None)],
+    ("volumetric.animate", "iterations"): [(MarkerAnimator.animate, "iterations", None)],
+    ("volumetric.animate", "first_iterations"): [(MarkerAnimator.animate, "first_iterations", None)],
 }
 # relative to the bbox diagonal in the config, lengths in the library: the library has no default
 RELATIVE = {
@@ -120,29 +133,33 @@ RELATIVE = {
     ("constraints", "tau"): [(spacetime_constraints, "tau")],
     ("fit", "eps_rel"): [(FitSettings, "eps")],
     ("integrate", "atol_rel"): [(rk45, "atol"), (rk45_opencl, "atol"), (OpenCLIntegrator.integrate, "atol")],
-    ("skeletal_pose", "margin"): [(MedialBallFlow, "margin"), (medial_ball_flow, "margin"),
+    ("medial.pose", "margin"): [(MedialBallFlow, "margin"), (medial_ball_flow, "margin"),
                                   (SkeletalPoser.author, "margin")],
-    ("repair_medial", "margin"): [(MedialRepair, "margin"), (medial_repair, "margin")],
+    ("medial.repair", "margin"): [(MedialRepair, "margin"), (medial_repair, "margin")],
 }
-STAGE_ONLY = {("integrate", "device"), ("fit", "device"), ("fit", "keep_checkpoint"), ("volumetric_animate", "attach"),
-              ("volumetric_animate", "max_offset")}
+STAGE_ONLY = {("integrate", "device"), ("fit", "device"), ("fit", "keep_checkpoint"), ("volumetric.animate", "attach"),
+              ("volumetric.animate", "max_offset")}
 """Options of a stage with no library counterpart: checked against the stage's default only."""
-WORKFLOW_ONLY = {("demo", "folder"), ("classify", "exclude"), ("integrate", "device"), ("fit", "device"), ("skeletal_pose", "rig"),
-                 ("skeletal_pose", "mesh"), ("skeletal_pose", "out"), ("downstream", "baselines"),
-                 ("volumetric_pose", "script"), ("volumetric_pose", "mesh"), ("volumetric_pose", "out"),
-                 ("repair_volumetric", "tet_vertices"), ("volumetric_animate", "tracks"), ("volumetric_animate", "mesh"),
-                 ("volumetric_animate", "out"), ("volumetric_animate", "rigid")} | STAGE_ONLY | {
-    (section, "threads") for section, value in CONFIG.items() if isinstance(value, dict) and "threads" in value}
+WORKFLOW_ONLY = {("demo", "folder"), ("classify", "exclude"), ("integrate", "device"), ("fit", "device"), ("medial.pose", "rig"),
+                 ("medial.pose", "mesh"), ("medial.pose", "out"), ("downstream", "repairs"),
+                 ("volumetric.pose", "script"), ("volumetric.pose", "mesh"), ("volumetric.pose", "out"),
+                 ("volumetric.repair", "tet_vertices"), ("volumetric.animate", "tracks"), ("volumetric.animate", "mesh"),
+                 ("volumetric.animate", "out"), ("volumetric.animate", "rigid")} | STAGE_ONLY | {
+    (section, "threads") for section, value in SECTIONS.items() if "threads" in value}
 """Keys of the workflow (paths, per-pose inputs, rule threads) or of a stage only (the OpenCL device choice);
-repair_volumetric.tet_vertices goes to stage tet_mesh (its library default is checked in LIBRARY)."""
+volumetric.repair.tet_vertices goes to stage tet_mesh (its library default is checked in LIBRARY)."""
 
 
-SECTION_STAGES = {"contact": ["verify", "repair_contact"], "summary": ["summary", "render"]}
+SECTION_STAGES = {"contact": ["verify", "repair_contact"], "contact.repair": ["repair_contact"],
+                  "summary": ["summary", "render"], "medial.skeleton": ["skeleton", "skeletal_pose"],
+                  "medial.repair": ["repair_medial"], "medial.pose": ["skeletal_pose"],
+                  "volumetric.repair": ["repair_volumetric"], "volumetric.pose": ["volumetric_pose"],
+                  "volumetric.animate": ["volumetric_animate"]}
 """Config sections read by other stages than the one of their name."""
 
 
 def tunables():
-    return [(s, k) for s, section in CONFIG.items() if isinstance(section, dict) for k in section]
+    return [(s, k) for s, section in SECTIONS.items() for k in section]
 
 
 def _stage_parser(stage):
@@ -153,15 +170,14 @@ def _stage_parser(stage):
 
 
 def test_config_yaml_holds_exactly_the_schemas_keys_with_its_defaults():
-    props = SCHEMA["properties"]
-    assert set(CONFIG) == set(props)
-    for key, prop in props.items():
-        if prop.get("type") == "object" and "properties" in prop:
-            assert set(CONFIG[key]) == set(prop["properties"]), key
-            for sub, spec in prop["properties"].items():
-                assert CONFIG[key][sub] == spec["default"], f"{key}.{sub}"
-        else:
-            assert CONFIG[key] == prop["default"], key
+    def check(config, props, prefix):
+        assert set(config) == set(props), prefix
+        for key, prop in props.items():
+            if prop.get("type") == "object" and "properties" in prop:
+                check(config[key], prop["properties"], f"{prefix}{key}.")
+            else:
+                assert config[key] == prop["default"], prefix + key
+    check(CONFIG, SCHEMA["properties"], "")
 
 
 def test_every_tunable_is_accounted_for():
@@ -174,7 +190,7 @@ def test_stage_defaults_equal_the_config(section):
         parser = _stage_parser(stage)
         for s, key in tunables():
             if s == section and (s, key) not in WORKFLOW_ONLY - STAGE_ONLY:
-                assert parser.get_default(key) == CONFIG[s][key], f"stages/{stage}.py --{key.replace('_', '-')}"
+                assert parser.get_default(key) == SECTIONS[s][key], f"stages/{stage}.py --{key.replace('_', '-')}"
 
 
 @pytest.mark.parametrize("key", sorted(LIBRARY), ids="{0[0]}.{0[1]}".format)
@@ -182,7 +198,7 @@ def test_library_defaults_equal_the_config(key):
     for owner, name, convert in LIBRARY[key]:
         value = default(owner, name)
         assert value is not NONE, f"{owner.__name__}({name}) has no default"
-        assert (convert or (lambda v: v))(value) == CONFIG[key[0]][key[1]], f"{owner.__name__}({name}={value!r})"
+        assert (convert or (lambda v: v))(value) == SECTIONS[key[0]][key[1]], f"{owner.__name__}({name}={value!r})"
 
 
 @pytest.mark.parametrize("key", sorted(RELATIVE), ids="{0[0]}.{0[1]}".format)

@@ -75,8 +75,8 @@ def test_adding_a_pose_plans_only_that_pose_and_a_code_change_only_what_it_chang
     jobs = planned(checkout, tmp_path, *config)
     per_pose = {"validate", "keyframes", "classify", "constraints", "fit", "integrate", "verify", "export",
                 "downstream", "render", "repair_medial", "repair_volumetric", "repair_contact"}
-    assert set(jobs) == per_pose | {"export_baseline", "summary", "overview", "viewer", "all"}
-    assert all(jobs[rule] == 1 for rule in per_pose) and jobs["export_baseline"] == 3
+    assert set(jobs) == per_pose | {"export_repair", "summary", "overview", "viewer", "all"}
+    assert all(jobs[rule] == 1 for rule in per_pose) and jobs["export_repair"] == 3
     proc = run(checkout, tmp_path, *config)
     assert proc.returncode == 0, proc.stderr[-3000:]
     # a comment in the library module of the verify stage: verify and what reads its output rerun, nothing else
@@ -114,7 +114,7 @@ def test_a_bad_pose_fails_alone_with_one_line_and_earlier_results_stay(checkout,
 
 def test_a_run_killed_during_the_fit_finishes_with_the_same_command(checkout, tmp_path):
     library = balls(tmp_path / "lib", ["ball-01"])
-    config = ["--config", f"library={library}", "baselines=[]"]
+    config = ["--config", f"library={library}", "repairs=[]"]
     reference = tmp_path / "reference"
     assert run(checkout, reference, *config).returncode == 0
     env = {**os.environ, "PYTHONPATH": str(checkout / "lib")}
@@ -152,7 +152,7 @@ def test_a_library_split_along_a_seam_is_repaired_welded_and_split_again(checkou
     library = tmp_path / "seams"
     for name, X in (("demo-reference", V), ("demo-01", poses["demo-01"])):
         write_mesh(library / f"{name}.obj", np.vstack([X, X[shared]]), F2)
-    proc = run(checkout, tmp_path, "--config", f"library={library}", "baselines=[]")
+    proc = run(checkout, tmp_path, "--config", f"library={library}", "repairs=[]")
     assert proc.returncode == 0, proc.stderr[-3000:]
     out, F_out = read_mesh(tmp_path / "results" / "seams" / "repaired" / "demo-01.obj")
     assert np.array_equal(F_out, F2) and len(out) == len(V) + len(shared)
@@ -167,7 +167,7 @@ def test_a_library_split_along_a_seam_is_repaired_welded_and_split_again(checkou
     opened = np.vstack([poses["demo-02"], poses["demo-02"][shared]])
     opened[copies[5]] += [0.0, 0.0, 0.1]  # the seam opens in this pose
     write_mesh(library / "demo-02.obj", opened, F2)
-    proc = run(checkout, tmp_path, "--config", f"library={library}", "baselines=[]", "poses=demo-02")
+    proc = run(checkout, tmp_path, "--config", f"library={library}", "repairs=[]", "poses=demo-02")
     errors = [line for line in proc.stderr.splitlines() if line.startswith("posefix validate: error:")]
     assert proc.returncode != 0 and len(errors) == 1
     assert f"demo-02.obj: vertices {shared[5]} and {copies[5]} coincide in the reference (a seam)" in errors[0]

@@ -146,7 +146,7 @@ def medial(demo_artifacts):
 
 def test_downstream_checks_a_baseline_as_a_third_example(demo_artifacts, medial, tmp_path):
     run_stage("downstream", "--keyframes", demo_artifacts / "keyframes.h5", "--verify", demo_artifacts / "verify.h5",
-              "--alphas", 1.0, "--k-bend", 0.01, "--max-iters", 4, "--baseline", f"medial={medial}",
+              "--alphas", 1.0, "--k-bend", 0.01, "--max-iters", 4, "--repair", f"medial={medial}",
               "--out", tmp_path / "d.h5", "--png", tmp_path / "d.png")
     with h5py.File(tmp_path / "d.h5", "r") as fh:
         assert fh["example"][()].tolist() == [0, 1, 2]
@@ -158,7 +158,7 @@ def test_downstream_checks_a_baseline_as_a_third_example(demo_artifacts, medial,
         assert fh["metrics"].attrs["medial_iterations"] == iterations[2] and fh["metrics"].attrs["runs"] == 3
         assert str(medial) in json.loads(fh.attrs["inputs"])
     proc = run_stage("downstream", "--keyframes", demo_artifacts / "keyframes.h5", "--verify",
-                     demo_artifacts / "verify.h5", "--baseline", f"medial={demo_artifacts / 'verify.h5'}",
+                     demo_artifacts / "verify.h5", "--repair", f"medial={demo_artifacts / 'verify.h5'}",
                      "--out", tmp_path / "e.h5", check=False)
     assert proc.returncode == 2 and "not a 'repair_medial' artifact" in proc.stderr and not (tmp_path / "e.h5").exists()
 
@@ -169,7 +169,7 @@ def test_render_draws_the_baseline_beside_s0(demo_artifacts, medial, tmp_path):
               "--fit", demo_artifacts / "fit.h5", "--verify", demo_artifacts / "verify.h5",
               "--benchmarks", tmp_path, "--pose", "demo-01"]
     run_stage("render", *common, "--out", tmp_path / "two")
-    run_stage("render", *common, "--baseline", f"medial={medial}", "--out", tmp_path / "three")
+    run_stage("render", *common, "--repair", f"medial={medial}", "--out", tmp_path / "three")
     two, three = imread(tmp_path / "two" / "renders.png"), imread(tmp_path / "three" / "renders.png")
     assert three.shape[0] == two.shape[0] and abs(three.shape[1] - 1.5 * two.shape[1]) <= 2  # a third panel
     for name in ("deviation", "classification", "fit"):  # the other figures do not change

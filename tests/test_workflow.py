@@ -101,7 +101,7 @@ def test_the_report_compares_s0_with_the_baseline_repairs(demo_run, name):
                 assert free[~cl["mask"][()]].all()
             if name == "contact":  # no new intersection, by construction
                 assert baseline["intersecting_faces"]["repaired_new"] == 0 and not fh["new_faces"][()].any()
-        assert baseline["deviation"] == pytest.approx(dev) and "downstream" not in baseline  # downstream.baselines
+        assert baseline["deviation"] == pytest.approx(dev) and "downstream" not in baseline  # downstream.repairs
         figures = demo_run / "reports" / "demo" / "figures" / e["pose"]
         renders, deviation_map = imread(figures / "renders.png"), imread(figures / "deviation.png")
         assert 2 * renders.shape[1] == 5 * deviation_map.shape[1]  # five panels of 5 inches, two of 5
@@ -110,20 +110,20 @@ def test_the_report_compares_s0_with_the_baseline_repairs(demo_run, name):
 
 
 def test_baselines_reach_the_report_and_the_check(tmp_path):
-    """config baselines adds the baseline artifacts to summary and render, downstream.baselines to the check;
-    baselines=[] leaves them out everywhere."""
-    proc = snakemake(tmp_path, "-n", "-p", "--config", "poses=demo-01", "downstream={'baselines': True}")
+    """config repairs adds the other repairs' artifacts to summary and render, downstream.repairs to the check;
+    repairs=[] leaves them out everywhere."""
+    proc = snakemake(tmp_path, "-n", "-p", "--config", "poses=demo-01", "downstream={'repairs': True}")
     assert proc.returncode == 0, proc.stderr[-2000:]
     commands = [line for line in (proc.stdout + proc.stderr).splitlines() if "stages/" in line]
     for name in ("medial", "volumetric", "contact"):
-        option = f"--baseline {name}=results/demo/demo-01/{name}.h5"
+        option = f"--repair {name}=results/demo/demo-01/{name}.h5"
         for stage in ("render", "downstream"):
             assert sum(f"stages/{stage}.py" in c and option in c for c in commands) == 1, (stage, name)
-    assert any("stages/summary.py" in c and "--baselines medial,volumetric,contact" in c for c in commands)
-    proc = snakemake(tmp_path, "-n", "-p", "--config", "poses=demo-01", "baselines=[]")
+    assert any("stages/summary.py" in c and "--repairs medial,volumetric,contact" in c for c in commands)
+    proc = snakemake(tmp_path, "-n", "-p", "--config", "poses=demo-01", "repairs=[]")
     assert proc.returncode == 0, proc.stderr[-2000:]
     commands = [line for line in (proc.stdout + proc.stderr).splitlines() if "stages/" in line]
-    assert len(commands) > 10 and not any("--baseline" in c or "medial" in c or "volumetric" in c
+    assert len(commands) > 10 and not any("--repair " in c or "medial" in c or "volumetric" in c
                                           or "repair_contact" in c for c in commands)
 
 
@@ -241,9 +241,9 @@ def test_nested_config_overrides_reach_the_stages(tmp_path):
 
 def test_constraints_are_an_intermediate_unless_kept(tmp_path):
     removed = "Would remove temporary output results/demo/demo-01/constraints.h5"
-    proc = snakemake(tmp_path, "-n", "--config", "poses=demo-01", "baselines=[]")
+    proc = snakemake(tmp_path, "-n", "--config", "poses=demo-01", "repairs=[]")
     assert proc.returncode == 0 and removed in proc.stdout + proc.stderr, proc.stderr[-2000:]
-    proc = snakemake(tmp_path, "-n", "--config", "poses=demo-01", "baselines=[]", "keep_intermediates=true")
+    proc = snakemake(tmp_path, "-n", "--config", "poses=demo-01", "repairs=[]", "keep_intermediates=true")
     assert proc.returncode == 0 and "results/demo/demo-01/constraints.h5" in proc.stdout + proc.stderr
     assert "Would remove temporary output" not in proc.stdout + proc.stderr
 
@@ -257,7 +257,7 @@ def test_files_that_cannot_be_poses_are_left_out_alone_and_the_others_repaired(t
     write_mesh(library / "walk{2}.obj", V * 1.1, F)
     (library / "gone.obj").symlink_to(tmp_path / "nowhere.obj")
     (library / "loop.obj").symlink_to(library / "loop.obj")
-    proc = snakemake(tmp_path, "--config", f"library={library}", "baselines=[]")
+    proc = snakemake(tmp_path, "--config", f"library={library}", "repairs=[]")
     assert proc.returncode == 0 and "Traceback" not in proc.stderr, proc.stderr[-3000:]
     warnings = [line for line in proc.stderr.splitlines() if line.startswith("posefix: warning:")]
     assert warnings == [
@@ -281,7 +281,7 @@ def test_plain_snakemake_ends_a_failed_run_with_the_posefix_error_lines(tmp_path
     write_mesh(library / "ball-reference.obj", V, F)
     write_mesh(library / "ball-01.obj", V * [1.2, 1.0, 0.9], F)
     (library / "ball-02.obj").write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n")
-    proc = snakemake(tmp_path, "--config", f"library={library}", "baselines=[]")
+    proc = snakemake(tmp_path, "--config", f"library={library}", "repairs=[]")
     assert proc.returncode != 0
     line = (f"posefix validate: error: {library / 'ball-02.obj'}: line 4: face vertex index 9 is out of range 1..3 "
             "(OBJ indices start at 1)")
@@ -304,7 +304,7 @@ def test_a_library_that_would_not_fit_the_runs_memory_is_refused_up_front_in_one
     V, F = icosphere(2)
     write_mesh(library / "ball-reference.obj", V, F)
     write_mesh(library / "ball-01.obj", V * [1.2, 1.0, 0.9], F)
-    proc = snakemake(tmp_path, "--resources", "mem_mb=100", "--config", f"library={library}", "baselines=[]")
+    proc = snakemake(tmp_path, "--resources", "mem_mb=100", "--config", f"library={library}", "repairs=[]")
     assert proc.returncode != 0 and "Traceback" not in proc.stderr, proc.stderr[-3000:]
     assert proc.stderr.splitlines()[-1].startswith(
         f"posefix: error: {library / 'ball-reference.obj'}: 162 vertices need about 1.0 GB in stage "), proc.stderr
@@ -355,7 +355,7 @@ def test_a_second_subset_of_poses_adds_to_the_librarys_summary(tmp_path):
     write_mesh(library / "ball-01.obj", V * [1.2, 1.0, 0.9], F)
     write_mesh(library / "ball-02.obj", V * [0.9, 1.1, 1.0], F)
     for pose in ("ball-01", "ball-02"):
-        proc = snakemake(tmp_path, "--config", f"library={library}", f"poses={pose}", "baselines=[]")
+        proc = snakemake(tmp_path, "--config", f"library={library}", f"poses={pose}", "repairs=[]")
         assert proc.returncode == 0, proc.stderr[-3000:]
         if pose == "ball-01":
             first = (tmp_path / "results" / "lib" / "ball-01" / "verify.h5").stat().st_mtime_ns
@@ -372,7 +372,7 @@ def _limb_summary(folder, scale):
     library = folder / "limb"
     write_mesh(library / "reference.obj", scale * V, F)
     write_mesh(library / "demo-03.obj", scale * poses["demo-03"], F)
-    proc = snakemake(folder, "reports/limb/summary.json", "--config", f"library={library}", "baselines=[contact]",
+    proc = snakemake(folder, "reports/limb/summary.json", "--config", f"library={library}", "repairs=[contact]",
                      "downstream={'max_iters': 1}")
     assert proc.returncode == 0, proc.stderr[-3000:]
     return json.loads((folder / "reports" / "limb" / "summary.json").read_text())["poses"]
@@ -403,11 +403,11 @@ def test_a_pose_that_fails_now_is_not_taken_as_finished_from_an_earlier_runs_fil
     write_mesh(library / "ball-reference.obj", V, F)
     write_mesh(library / "ball-01.obj", V * [1.2, 1.0, 0.9], F)
     write_mesh(library / "ball-02.obj", V * [0.9, 1.1, 1.0], F)
-    assert snakemake(tmp_path, SUMMARY, "--config", f"library={library}", "baselines=[]").returncode == 0
+    assert snakemake(tmp_path, SUMMARY, "--config", f"library={library}", "repairs=[]").returncode == 0
     nan = V * [0.9, 1.1, 1.0]
     nan[3, 1] = np.nan
     write_mesh(library / "ball-02.obj", nan, F)
-    proc = snakemake(tmp_path, SUMMARY, "--config", f"library={library}", "baselines=[]")
+    proc = snakemake(tmp_path, SUMMARY, "--config", f"library={library}", "repairs=[]")
     assert proc.returncode == 1 and (tmp_path / "results" / "lib" / "ball-02" / "verify.h5").exists(), proc.stderr
     summary = json.loads((tmp_path / "reports" / "lib" / "summary.json").read_text())
     assert [e["pose"] for e in summary["poses"]] == ["ball-01"], proc.stderr[-3000:]
@@ -444,7 +444,7 @@ def test_bad_poses_among_good_ones_each_fail_in_one_line_and_the_good_ones_are_r
     write_mesh(library / "ball-01.obj", V * [1.2, 1.0, 0.9], F)
     write_mesh(library / "ball-02.obj", V * [0.9, 1.1, 1.0], F)
     bad = _bad_poses(library, V, F)
-    proc = snakemake(tmp_path, SUMMARY, "--config", f"library={library}", "baselines=[]")
+    proc = snakemake(tmp_path, SUMMARY, "--config", f"library={library}", "repairs=[]")
     assert proc.returncode == 1 and "Traceback" not in proc.stderr, proc.stderr[-3000:]
     lines = proc.stderr.splitlines()
     for name, says in bad.items():
@@ -471,7 +471,7 @@ def test_poses_whose_names_a_shell_would_split_are_repaired_under_their_own_name
     names = ["walk 2", "it's $HOME;a", 'sauté "hi"']  # a space, quotes, a dollar sign, a semicolon, non-ASCII
     for i, name in enumerate(names):
         write_mesh(library / f"{name}.obj", V * [1.0 + 0.05 * i, 1.0, 0.95], F)
-    proc = snakemake(tmp_path, SUMMARY, "--config", f"library={library}", "baselines=[]")
+    proc = snakemake(tmp_path, SUMMARY, "--config", f"library={library}", "repairs=[]")
     assert proc.returncode == 0 and "Traceback" not in proc.stderr, proc.stderr[-3000:]
     summary = json.loads((tmp_path / "reports" / "lib" / "summary.json").read_text())
     assert sorted(e["pose"] for e in summary["poses"]) == sorted(names)

@@ -8,7 +8,7 @@ import pytest
 from conftest import run_stage
 from posefix.io.artifacts import write_artifact
 from posefix.verify.deviation import deviation
-from posefix.report.summary import SUMMARY_STAGES, baseline_entry, downstream_entry, pose_entry, summary_markdown
+from posefix.report.summary import SUMMARY_STAGES, repair_entry, downstream_entry, pose_entry, summary_markdown
 
 
 def _metrics():
@@ -78,13 +78,13 @@ def _displaced():
 def test_baseline_entry_measures_the_deviation_as_s0():
     start, repaired, mask = _displaced()
     _, dev = deviation(repaired, start, mask, 2.0)
-    b = baseline_entry("medial", _baseline_metrics(), dev, _downstream())
+    b = repair_entry("medial", _baseline_metrics(), dev, _downstream())
     assert b["intersecting_faces"] == {"repaired": 6, "repaired_new": 5}
     assert b["iterations"] == 12 and b["seconds"] == 2.5 and "downstream" not in b  # not checked towards it
     assert b["deviation"]["constrained_mean"] == pytest.approx(0.01) and b["deviation"]["constrained_max"] == (
         pytest.approx(0.01))
     assert b["deviation"]["free_mean"] == pytest.approx(0.4 / 3) and b["deviation"]["free_max"] == pytest.approx(0.2)
-    b = baseline_entry("medial", _baseline_metrics(), dev, _downstream(medial=True))
+    b = repair_entry("medial", _baseline_metrics(), dev, _downstream(medial=True))
     assert b["downstream"] == downstream_entry(_downstream(medial=True), ("medial",))
 
 
@@ -106,7 +106,7 @@ def test_pose_entry_and_its_markdown_row():
 def test_markdown_compares_s0_with_the_baseline_per_pose():
     start, repaired, mask = _displaced()
     d = _downstream(medial=True)
-    baselines = {"medial": baseline_entry("medial", _baseline_metrics(), deviation(repaired, start, mask, 2.0)[1], d)}
+    baselines = {"medial": repair_entry("medial", _baseline_metrics(), deviation(repaired, start, mask, 2.0)[1], d)}
     seconds = dict.fromkeys(SUMMARY_STAGES, 1.5)
     e = pose_entry("p-01", _metrics(), d, seconds, baselines)
     assert e["baselines"] == baselines and e == {**pose_entry("p-01", _metrics(), d, seconds), "baselines": baselines}
@@ -144,8 +144,8 @@ def test_summary_and_overview_stages_compare_the_baseline(tmp_path):
     out = tmp_path / "reports"
     out.mkdir()
     common = ["--results", results, "--poses", "p-01"]
-    run_stage("summary", *common, "--baselines", "medial", "--out", out / "s.json", "--markdown", out / "s.md")
-    run_stage("summary", *common, "--baselines", "", "--out", out / "plain.json", "--markdown", out / "plain.md")
+    run_stage("summary", *common, "--repairs", "medial", "--out", out / "s.json", "--markdown", out / "s.md")
+    run_stage("summary", *common, "--repairs", "", "--out", out / "plain.json", "--markdown", out / "plain.md")
     entry = json.loads((out / "s.json").read_text())["poses"][0]
     medial = entry.pop("baselines")["medial"]
     assert entry == json.loads((out / "plain.json").read_text())["poses"][0]  # S0's entry unchanged

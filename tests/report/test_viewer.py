@@ -13,7 +13,7 @@ import pytest
 from matplotlib.image import imread
 
 from conftest import icosphere, run_stage
-from posefix.io.artifacts import read_artifact, read_baseline, write_artifact
+from posefix.io.artifacts import read_artifact, read_repair, write_artifact
 from posefix.mesh.intersections import self_intersecting_pairs
 from posefix.report.viewer import decode_array, decode_positions, encode_array, encode_positions
 from posefix.verify.flags import REPLACED_PASS_THROUGH
@@ -153,7 +153,7 @@ def test_the_page_shows_each_mesh_with_its_own_vertex_order_and_faces(library, t
     kf, _ = read_artifact(library / "results" / pose / "keyframes.h5", "keyframes", ["reference", "target", "faces"])
     files = {"target": kf["target"], "reference": kf["reference"],
              "space-time": read_artifact(library / "results" / pose / "verify.h5", "verify", ["repaired"])[0]["repaired"],
-             "medial": read_baseline(library / "results" / pose / "medial.h5", "medial", ["repaired"])[0]["repaired"]}
+             "medial": read_repair(library / "results" / pose / "medial.h5", "medial", ["repaired"])[0]["repaired"]}
     X, F = files[mesh], kf["faces"]
     assert np.array_equal(_floats(shown["positions"], X.shape), X.astype(np.float32))
     assert np.array_equal(_floats(shown["corners"], (len(F), 3, 3)), X.astype(np.float32)[F])

@@ -72,7 +72,7 @@ def test_a_library_too_large_for_the_memory_given_is_refused_in_one_line_before_
 
 @pytest.mark.pipeline
 def test_posefix_repair_from_another_folder_matches_the_workflow_run(demo_run, tmp_path):
-    proc = posefix("repair", demo_run / "data" / "demo", "--config", "poses=demo-01", "baselines=[]",
+    proc = posefix("repair", demo_run / "data" / "demo", "--config", "poses=demo-01", "repairs=[]",
                    cwd=tmp_path)
     assert proc.returncode == 0, proc.stderr[-3000:]
     lines = proc.stdout.splitlines()
@@ -89,7 +89,7 @@ def test_posefix_repair_from_another_folder_matches_the_workflow_run(demo_run, t
         assert a.keys() == b.keys() and all(np.array_equal(a[k], b[k]) for k in a if "seconds" not in k), stage
     assert not (tmp_path / "results" / "demo" / "demo-02").exists()
     assert list((tmp_path / "posefix-logs").glob("repair-*.log"))
-    proc = posefix("report", demo_run / "data" / "demo", "--config", "poses=demo-01", "baselines=[]",
+    proc = posefix("report", demo_run / "data" / "demo", "--config", "poses=demo-01", "repairs=[]",
                    cwd=tmp_path)
     assert proc.returncode == 0, proc.stderr[-3000:]
     assert (tmp_path / "reports" / "demo" / "report.html").stat().st_size > 100_000
@@ -115,7 +115,7 @@ def test_a_second_run_in_a_folder_where_one_works_is_refused_in_one_line(tmp_pat
     leaves the first one's work alone."""
     library = ball_library(tmp_path / "lib")
     first = subprocess.Popen([sys.executable, "-m", "posefix.workflow.command", "repair", str(library), "--config",
-                              "baselines=[]"], cwd=tmp_path, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                              "repairs=[]"], cwd=tmp_path, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
                              start_new_session=True)
     try:
         for _ in range(600):  # until Snakemake has locked the folder
@@ -123,7 +123,7 @@ def test_a_second_run_in_a_folder_where_one_works_is_refused_in_one_line(tmp_pat
                 break
             time.sleep(0.1)
         assert first.poll() is None, "the first run ended before the second started"
-        proc = posefix("repair", library, "--config", "baselines=[]", cwd=tmp_path)
+        proc = posefix("repair", library, "--config", "repairs=[]", cwd=tmp_path)
     finally:
         os.killpg(first.pid, signal.SIGINT)
         first.wait(timeout=120)
@@ -212,7 +212,7 @@ def test_the_output_lines_shown_as_they_are():
 @pytest.mark.pipeline
 def test_a_dry_run_shows_the_jobs_it_would_run(tmp_path):
     library = ball_library(tmp_path / "lib")
-    proc = posefix("repair", library, "-n", "--config", "baselines=[]", cwd=tmp_path)
+    proc = posefix("repair", library, "-n", "--config", "repairs=[]", cwd=tmp_path)
     assert proc.returncode == 0, proc.stderr[-3000:]
     lines = proc.stdout.splitlines()
     assert lines[0] == "Job stats:" and any(line.split() == ["verify", "1"] for line in lines)
@@ -287,7 +287,7 @@ def test_posefix_repair_of_a_usd_file_with_a_bad_frame_repairs_the_others_and_wr
     bad = V * 1.2
     bad[7] = np.nan
     path = write_usd_frames(tmp_path / "ball.usda", V, [V * 1.1, bad, V * 0.9 + 0.05], F)
-    proc = posefix("repair", path, "--config", "baselines=[]", cwd=tmp_path)
+    proc = posefix("repair", path, "--config", "repairs=[]", cwd=tmp_path)
     assert proc.returncode != 0 and "Traceback" not in proc.stderr
     lines = (proc.stdout + proc.stderr).splitlines()
     assert f"posefix unpack: error: {path}: mesh /Character/Body, frame 2: 1 points are NaN or infinite (first: " \

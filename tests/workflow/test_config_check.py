@@ -22,28 +22,48 @@ def test_every_problem_is_one_line_naming_its_key():
     config["integrate"]["device"] = "tpu"
     config["fit"]["max_centres"] = 3
     config["keyframs"] = {}
-    config["baselines"] = ["medial", "volumetrc"]
+    config["repairs"] = ["medial", "volumetrc"]
     assert config_problems(config, SCHEMA) == [
-        "baselines.1: 'volumetrc' is not one of 'medial', 'volumetric', 'contact'",
         "fit.max_centres: unknown key (did you mean 'max_centers'?)",
         "integrate.device: 'tpu' is not one of 'auto', 'cpu', 'gpu', 'numpy'",
         "keyframes.count: 1 is less than the minimum of 2",
         "keyframs: unknown key (did you mean 'keyframes'?)",
+        "repairs.1: 'volumetrc' is not one of 'medial', 'volumetric', 'contact'",
     ]
 
 
 def test_text_from_the_command_line_takes_the_schema_types_at_its_place():
     schema = SCHEMA
-    given = {"baselines": "medial,contact", "poses": "a,b",  # what Snakemake's --config leaves as text
-             "downstream": {"alphas": ["1.0"], "k_bend": ["1e-05", "0.01"], "baselines": "true", "max_iters": "20"},
+    given = {"repairs": "medial,contact", "poses": "a,b",  # what Snakemake's --config leaves as text
+             "downstream": {"alphas": ["1.0"], "k_bend": ["1e-05", "0.01"], "repairs": "true", "max_iters": "20"},
              "classify": {"exclude": {"demo-01": ["3", "4"], "demo-02": "ids.txt"}, "contact": "0"},
-             "skeletal_pose": {"rig": "null", "mesh": "me.obj"}, "fit": {"threads": 2}}
+             "medial": {"pose": {"rig": "null", "mesh": "me.obj"}}, "fit": {"threads": 2}}
     assert typed_by_schema(given, schema) == {
-        "baselines": ["medial", "contact"], "poses": "a,b",
-        "downstream": {"alphas": [1.0], "k_bend": [1e-05, 0.01], "baselines": True, "max_iters": 20},
+        "repairs": ["medial", "contact"], "poses": "a,b",
+        "downstream": {"alphas": [1.0], "k_bend": [1e-05, 0.01], "repairs": True, "max_iters": 20},
         "classify": {"exclude": {"demo-01": [3, 4], "demo-02": "ids.txt"}, "contact": 0.0},
-        "skeletal_pose": {"rig": None, "mesh": "me.obj"}, "fit": {"threads": 2}}
+        "medial": {"pose": {"rig": None, "mesh": "me.obj"}}, "fit": {"threads": 2}}
     assert typed_by_schema({"fit": {"threads": "two"}}, schema) == {"fit": {"threads": "two"}}  # the check names it
+
+
+def test_the_keys_renamed_in_2026_12_are_read_at_their_new_places_with_one_notice_each():
+    from posefix.workflow.config_check import RENAMED_KEYS, renamed_config
+    defaults = yaml.safe_load((ROOT / "config.yaml").read_text())
+    old = {"baselines": ["contact"], "repair_medial": {"max_iters": 5}, "repair_volumetric": {"max_rings": 2},
+           "volumetric_pose": {"frames": 2}, "volumetric_animate": {"iterations": 1}, "repair_contact": {"threads": 2},
+           "skeletal_pose": {"smooth_iters": 3, "falloff": 0.3}}
+    given = {**defaults, **old, "downstream": {**defaults["downstream"], "baselines": True}}
+    config, notices = renamed_config(given)
+    assert config_problems(config, SCHEMA) == [] and len(notices) == len(RENAMED_KEYS)
+    assert (config["repairs"], config["medial"]["repair"]["max_iters"], config["volumetric"]["repair"]["max_rings"],
+            config["volumetric"]["pose"]["frames"], config["volumetric"]["animate"]["iterations"],
+            config["contact"]["repair"]["threads"], config["medial"]["skeleton"]["smooth_iters"],
+            config["medial"]["pose"]["falloff"], config["downstream"]["repairs"]) == (
+        ["contact"], 5, 2, 2, 1, 2, 3, 0.3, True)
+    assert config["medial"]["repair"]["tau"] == defaults["medial"]["repair"]["tau"]  # the others kept
+    assert "posefix: config key 'skeletal_pose' is now 'medial.pose and medial.skeleton' (the old key goes in the " \
+           "next release)" in notices
+    assert renamed_config(defaults) == (defaults, [])
 
 
 @pytest.mark.parametrize("name", ["..", ".", "a/b", ".hidden", "x y", "{p}"])

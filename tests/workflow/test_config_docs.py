@@ -21,9 +21,16 @@ def test_every_key_of_the_config_has_a_row_with_its_meaning():
     schema = yaml.safe_load((ROOT / "schemas" / "config.schema.yaml").read_text())
     config = yaml.safe_load((ROOT / "config.yaml").read_text())
     lines = configuration_markdown(schema).splitlines()
+
+    def check(name, value, spec):  # a key (dotted) of the config and its schema: a row under its section's heading
+        if "properties" in spec:
+            for key, sub in value.items():
+                check(f"{name}.{key}", sub, spec["properties"][key])
+            return
+        section, _, key = name.rpartition(".")
+        start = lines.index(f"## `{section}`") if section else 0
+        line = next(line for line in lines[start:] if line.startswith(f"| `{key}` |"))
+        assert not line.endswith("|  |"), f"{name} has no description in the schema"
+
     for key, value in config.items():
-        section = "properties" in schema["properties"][key]
-        start = lines.index(f"## `{key}`") if section else 0
-        for row in [f"| `{k}` |" for k in value] if section else [f"| `{key}` |"]:
-            line = next(line for line in lines[start:] if line.startswith(row))
-            assert not line.endswith("|  |"), f"{key}: {row} has no description in the schema"
+        check(key, value, schema["properties"][key])

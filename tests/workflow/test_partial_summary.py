@@ -50,7 +50,7 @@ def test_the_partial_report_runs_summary_overview_and_viewer_for_the_finished_po
                    (["contact"], 4.0))
     summary = (tmp_path / "summary.args").read_text().splitlines()
     assert summary[summary.index("--poses") + 1] == "a" and "--failed=b=posefix fit: error: res/lib/b/fit.h5: bad" \
-        in summary and summary[summary.index("--baselines") + 1] == "contact"
+        in summary and summary[summary.index("--repairs") + 1] == "contact"
     assert (tmp_path / "overview.args").exists() and (tmp_path / "viewer.args").exists()
     assert capsys.readouterr().err.splitlines() == [
         "posefix: summary of the 1 poses that finished, 1 listed as failed: rep/lib/summary.html"]

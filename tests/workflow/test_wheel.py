@@ -64,7 +64,7 @@ def test_the_wheel_carries_the_workflow_and_says_its_version(installed, tmp_path
 
 def test_the_installed_command_repairs_the_demo_from_an_empty_folder_as_the_checkout_does(installed, demo_run,
                                                                                           tmp_path):
-    proc = _run(installed, ["repair", "--config", "poses=demo-01", "baselines=[]", "downstream.max_iters=1"],
+    proc = _run(installed, ["repair", "--config", "poses=demo-01", "repairs=[]", "downstream.max_iters=1"],
                 tmp_path)
     assert proc.returncode == 0, proc.stderr[-3000:]
     log = next((tmp_path / "posefix-logs").glob("*.log")).read_text()
@@ -78,6 +78,6 @@ def test_the_installed_command_reads_a_usd_library(installed, tmp_path):
     workflow, one unpack job per pose and the reference."""
     V, F, poses = demo_library(around=12)
     path = write_usd_frames(tmp_path / "limb.usda", V, [poses["demo-01"], poses["demo-02"]], F)
-    proc = _run(installed, ["repair", path, "--dry-run", "--config", "baselines=[]"], tmp_path)
+    proc = _run(installed, ["repair", path, "--dry-run", "--config", "repairs=[]"], tmp_path)
     assert proc.returncode == 0, proc.stderr[-3000:]
     assert "unpack" in proc.stdout + proc.stderr, proc.stdout[-3000:]

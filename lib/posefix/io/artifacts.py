@@ -149,7 +149,7 @@ def source_file(path, depth=8):
     return path
 
 
-def read_baseline(path, name, names):
+def read_repair(path, name, names):
     """:func:`read_artifact` of the artifact of baseline repair ``name`` (written by stage ``repair_<name>``).
 
     Parameters

@@ -5,6 +5,17 @@ Shared by the workflow (``rules/report.smk`` declares the figures as outputs, wi
 workflow can import it cheaply.
 """
 
+REPAIRS = {"spacetime": "space-time", "medial": "medial", "volumetric": "volumetric", "contact": "contact"}
+"""The repairs: identifier (its package ``posefix.<id>``, rules file ``rules/<id>.smk``, tests folder ``tests/<id>``, and
+for the others than space-time its config section and ``repairs`` entry) -> its label in the report, the viewer and
+the API (``tests/test_names.py`` checks them all)."""
+
+SPACETIME = REPAIRS["spacetime"]
+"""The label of the space-time repair, the one the others are compared with."""
+
+COMPARED_REPAIRS = tuple(name for name in REPAIRS if name != "spacetime")
+"""The repairs config ``repairs`` may name: stage ``repair_<name>`` writes ``results/<library>/<pose>/<name>.h5``."""
+
 POSE_FIGURES = {
     "renders": "target vs repaired",
     "deviation": "deviation heat map",

@@ -13,8 +13,9 @@ from matplotlib.patches import Patch
 
 from posefix.verify.flags import (CONTACT, FLAGS, PUSHED, REPLACED_NEW_INTERSECTION, REPLACED_PASS_THROUGH,
                                   RIGID_REFERENCE, SEPARATED, SMOOTHED)
+from posefix.report.contents import SPACETIME
 from posefix.report.rasterizer import DISTORTED, HIGHLIGHT, SECONDARY, draw_mesh, face_values, heat_colors, view_limits
-from posefix.report.tables import DEVIATION_BAR, baseline_names, converged_runs, downstream_counts
+from posefix.report.tables import DEVIATION_BAR, repair_names, converged_runs, downstream_counts
 
 DPI = 110
 FLAG_COLORS = {REPLACED_PASS_THROUGH: "tab:red", REPLACED_NEW_INTERSECTION: "tab:orange", SMOOTHED: "tab:green",
@@ -25,7 +26,7 @@ EXAMPLE_STYLES = {"original": "--", "repaired": "-"}
 DEVIATION_MARKERS = (("constrained_max", "o", "V_C max"), ("constrained_mean", "s", "V_C mean"),
                      ("free_max", "^", "free max"))
 """Deviation summaries in the library overview: key, marker, label."""
-BASELINE_COLORS = ("tab:cyan", "tab:olive", "tab:brown")
+REPAIR_COLORS = ("tab:cyan", "tab:olive", "tab:brown")
 """Colour of each baseline repair (in ``summary.json``'s order) in the library overview."""
 CONSTRAINED = (0.25, 0.45, 0.85)
 """Colour of the faces of ``V_C`` (all three corners constrained) in the classification figure and the viewer."""
@@ -264,12 +265,12 @@ def _intersection_panel(ax, x, entries, names):
     ax.bar(x + dx[0], [e["intersecting_faces"]["target"] for e in entries], width, label="target")
     new = np.array([e["intersecting_faces"]["repaired_new"] for e in entries])
     inside = np.array([e["intersecting_faces"].get("repaired_new_in_fallback", 0) for e in entries])
-    s0 = "space-time" if names else "repaired"
+    s0 = SPACETIME if names else "repaired"
     ax.bar(x + dx[1], new - inside, width, color="tab:red", label=f"{s0}: new")
     ax.bar(x + dx[1], inside, width, bottom=new - inside, color="tab:pink", label=f"{s0}: new, in pass-through")
     for j, name in enumerate(names):
         ax.bar(x + dx[2 + j], [e["baselines"][name]["intersecting_faces"]["repaired_new"] for e in entries], width,
-               color=BASELINE_COLORS[j], label=f"{name}: new")
+               color=REPAIR_COLORS[j], label=f"{name}: new")
     ax.set_ylabel("intersecting faces")
     ax.legend(fontsize=8)
 
@@ -299,7 +300,7 @@ def _seconds_panel(ax, x, entries, names):
         ax.bar(x + dx[0], values, width, bottom=bottom, label=stage)
         bottom += values
     for j, name in enumerate(names):
-        ax.bar(x + dx[1 + j], [e["baselines"][name]["seconds"] for e in entries], width, color=BASELINE_COLORS[j],
+        ax.bar(x + dx[1 + j], [e["baselines"][name]["seconds"] for e in entries], width, color=REPAIR_COLORS[j],
                hatch="//", label=f"{name} repair")
     ax.set_ylabel("wall seconds per stage")
     ax.legend(fontsize=7, ncol=2)
@@ -308,10 +309,10 @@ def _seconds_panel(ax, x, entries, names):
 def _downstream_panels(fig, x, entries, names):
     """Overview panels 5 and 6: Gauss–Newton convergence (original, repaired and the baselines ``names``)
     and iterations, original vs repaired."""
-    counts, s0 = [downstream_counts(e) for e in entries], "space-time" if names else "repaired pose"
+    counts, s0 = [downstream_counts(e) for e in entries], SPACETIME if names else "repaired pose"
     series = [([c["converged_original"] for c in counts], "original target", "tab:gray"),
               ([c["converged_repaired"] for c in counts], s0, "tab:green")]
-    series += [([converged_runs(e["baselines"][name]["downstream"], name) for e in entries], name, BASELINE_COLORS[j])
+    series += [([converged_runs(e["baselines"][name]["downstream"], name) for e in entries], name, REPAIR_COLORS[j])
                for j, name in enumerate(names)]
     ax = fig.add_subplot(3, 2, 5)
     dx, width = _offsets(len(series))
@@ -344,7 +345,7 @@ def library_overview(entries, bar=DEVIATION_BAR, title=""):
     """
     poses = [e["pose"] for e in entries]
     x = np.arange(len(poses))
-    names = baseline_names(entries)
+    names = repair_names(entries)
     rows = 3 if all("downstream" in e for e in entries) else 2
     fig = Figure(figsize=(max(10, (0.9 + 0.3 * len(names)) * len(poses) + 4), 3.75 * rows), dpi=DPI)
     _intersection_panel(fig.add_subplot(rows, 2, 1), x, entries, names)

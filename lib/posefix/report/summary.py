@@ -30,7 +30,7 @@ def pose_entry(pose, metrics, downstream, seconds, baselines=None, distortion=No
     seconds : dict of str -> float or None
         Wall seconds per stage of :data:`SUMMARY_STAGES` (None where unknown).
     baselines : dict of str -> dict, optional
-        :func:`baseline_entry` per baseline repair of the pose (key ``baselines``; none: no key).
+        :func:`repair_entry` per baseline repair of the pose (key ``baselines``; none: no key).
     distortion : dict, optional
         :func:`posefix.mesh.distortion.distortion_summary` of the repaired pose against the target and the
         reference (key ``distortion``; none: no key).
@@ -85,7 +85,7 @@ def _finish_entry(verify):
                        "start": str(verify.get("contact_start", "integrated"))}}
 
 
-def baseline_entry(name, metrics, deviation, downstream, distortion=None):
+def repair_entry(name, metrics, deviation, downstream, distortion=None):
     """The summary of one baseline repair of a pose (``baselines.<name>`` of its entry).
 
     Parameters

@@ -3,7 +3,7 @@
 import html
 
 from posefix.mesh.distortion import DISTORTED_SHARE, SEVERE
-from posefix.report.contents import TIMED_STAGES
+from posefix.report.contents import SPACETIME, TIMED_STAGES
 
 DEVIATION_BAR = 1e-3
 """Constrained-region max deviation / d above which a pose is flagged."""
@@ -135,7 +135,7 @@ def _downstream_row(name, c):
             f"{c['paired_original']} / {c['paired_repaired']} | {fewer} |")
 
 
-def baseline_names(entries):
+def repair_names(entries):
     """The baseline repairs every entry has (``summary.json``'s ``baselines``), in their order, list of str."""
     first = entries[0].get("baselines", {}) if entries else {}
     return [name for name in first if all(name in e.get("baselines", {}) for e in entries)]
@@ -160,7 +160,7 @@ def compared_repairs(entry, names):
     faces beyond the distortion limit; None where not measured), ``seconds`` (space-time: :func:`repair_seconds`; another repair: its own) and
     ``converged`` (converged Gauss–Newton runs towards it; None without the check).
     """
-    out = {"space-time": _compared(entry, repair_seconds(entry), "repaired")}
+    out = {SPACETIME: _compared(entry, repair_seconds(entry), "repaired")}
     for name in names:
         out[name] = _compared(entry["baselines"][name], entry["baselines"][name]["seconds"], name)
     return out
@@ -187,7 +187,7 @@ def comparison_table(entries):
     per :data:`COMPARISON` column (``GN converged`` only when every repair has the downstream check, the
     distortion columns only when every repair was measured);
     ``([], [])`` without baselines."""
-    names = baseline_names(entries)
+    names = repair_names(entries)
     if not names:
         return [], []
     repairs = [compared_repairs(e, names) for e in entries]
@@ -203,7 +203,7 @@ def comparison_note(header):
     """What the columns of a :func:`comparison_table` with ``header`` mean, str."""
     note = ("'new faces': intersecting in the repaired pose but not in the reference; deviations from the target "
             "relative to the bbox diagonal, over space-time's V_C and the rest; seconds: space-time's stages keyframes to verify "
-            "(benchmark files), a baseline's stage (without the skeleton, once per library)")
+            "(benchmark files), another repair's stage (without the skeleton, once per library)")
     if any(h.startswith("worst edge ratio") for h in header):
         note += ("; 'worst edge ratio': the largest edge-length ratio (or its inverse) against the target; "
                  "'distorted faces': faces whose edge-length or area ratio exceeds the distortion limit against both "

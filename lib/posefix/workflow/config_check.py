@@ -32,6 +32,54 @@ def config_problems(config, schema):
     return sorted(set(lines))
 
 
+RENAMED_KEYS = {
+    "baselines": ("repairs",), "repair_medial": ("medial", "repair"), "skeletal_pose": ("medial", "pose"),
+    "repair_volumetric": ("volumetric", "repair"), "volumetric_pose": ("volumetric", "pose"),
+    "volumetric_animate": ("volumetric", "animate"), "repair_contact": ("contact", "repair"),
+    "downstream.baselines": ("downstream", "repairs"),
+}
+"""Config keys renamed in 2026-12 (old key, dotted where nested: its new place), so that each repair has one name
+and one section (issue 51); the old keys are read for one release, with a notice."""
+
+SKELETON_KEYS = ("medial", "tol", "smooth_iters", "smooth_step")
+"""The settings of ``skeletal_pose`` that are now ``medial.skeleton``'s (the skeletal mesh's, shared by the medial
+repair and the authoring)."""
+
+
+def renamed_config(config):
+    """``config`` (dict) with the keys of :data:`RENAMED_KEYS` in their new places (their values over what is there)
+    and one notice line per old key found, ``(dict, list of str)``; ``config`` is not changed.
+
+    Examples
+    --------
+    >>> new, notices = renamed_config({"baselines": [], "skeletal_pose": {"tol": 0.2, "tau": 1.0},
+    ...                                "medial": {"pose": {"tau": 0.5, "rig": None}}})
+    >>> new
+    {'medial': {'pose': {'tau': 1.0, 'rig': None}, 'skeleton': {'tol': 0.2}}, 'repairs': []}
+    >>> notices[0]
+    "posefix: config key 'baselines' is now 'repairs' (the old key goes in the next release)"
+    """
+    out, notices = dict(config), []
+    for old, new in RENAMED_KEYS.items():
+        section, _, key = old.rpartition(".")
+        holder = out.get(section) if section else out
+        if not isinstance(holder, dict) or key not in holder:
+            continue
+        holder = dict(holder)
+        value = holder.pop(key)
+        out = merged({k: v for k, v in out.items() if k != section}, {section: holder}) if section else holder
+        moved = {new[-1]: value}
+        if old == "skeletal_pose" and isinstance(value, dict):
+            moved = {"pose": {k: v for k, v in value.items() if k not in SKELETON_KEYS},
+                     "skeleton": {k: v for k, v in value.items() if k in SKELETON_KEYS}}
+        for name in reversed(new[:-1]):
+            moved = {name: moved}
+        out = merged(out, moved)
+        place = ".".join(new) + (" and medial.skeleton" if old == "skeletal_pose" else "")
+        notices.append(f"posefix: config key '{old}' is now '{place}' (the old key goes in the next release)")
+    return out, notices
+
+
 def nested(config):
     """``config`` (dict) with its dotted keys as nested sections, merged with the sections it has (:func:`merged`).
 
@@ -110,9 +158,9 @@ def typed_by_schema(value, schema):
     Examples
     --------
     >>> schema = {"properties": {"fit": {"properties": {"tol": {"type": "number"}, "opencl": {"type": "boolean"}}},
-    ...                          "baselines": {"type": "array", "items": {"type": "string"}}}}
-    >>> typed_by_schema({"fit": {"tol": "1e-05", "opencl": "false"}, "baselines": "medial,contact"}, schema)
-    {'fit': {'tol': 1e-05, 'opencl': False}, 'baselines': ['medial', 'contact']}
+    ...                          "repairs": {"type": "array", "items": {"type": "string"}}}}
+    >>> typed_by_schema({"fit": {"tol": "1e-05", "opencl": "false"}, "repairs": "medial,contact"}, schema)
+    {'fit': {'tol': 1e-05, 'opencl': False}, 'repairs': ['medial', 'contact']}
     """
     if isinstance(value, (dict, list)):
         schema = _alternative(schema, "object" if isinstance(value, dict) else "array")

@@ -32,10 +32,21 @@ def configuration_markdown(schema):
     top = {k: v for k, v in schema["properties"].items() if "properties" not in v}
     lines = [HEADER, "## Top level", ""] + _table(top, "")
     for section, spec in schema["properties"].items():
-        if "properties" in spec:
-            lines += ["", f"## `{section}`", ""]
-            lines += ([spec["description"], ""] if "description" in spec else []) + _table(spec["properties"], "")
+        lines += _sections(section, spec)
     return "\n".join(lines) + "\n"
+
+
+def _sections(name, spec):
+    """The lines of section ``name`` (dotted) and of the sections nested in it: a heading, its description, a table
+    of its settings (none for a section of sections only), list of str."""
+    if "properties" not in spec:
+        return []
+    settings = {k: v for k, v in spec["properties"].items() if "properties" not in v}
+    lines = ["", f"## `{name}`", ""] + ([spec["description"], ""] if "description" in spec else [])
+    lines += _table(settings, "") if settings else []
+    for key, sub in spec["properties"].items():
+        lines += _sections(f"{name}.{key}", sub)
+    return lines
 
 
 def _table(properties, prefix):

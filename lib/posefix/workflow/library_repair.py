@@ -22,6 +22,7 @@ from types import SimpleNamespace
 
 from posefix.io.containers import container_format
 from posefix.io.errors import PosefixError
+from posefix.report.contents import REPAIRS as LABELS, SPACETIME
 from posefix.report.tables import entry_status
 from posefix.workflow.command import library_name
 from posefix.workflow.config_check import nested
@@ -30,8 +31,8 @@ from posefix.workflow.files import workflow_folder
 
 log = logging.getLogger(__name__)
 
-REPAIRS = ("space-time", "medial", "volumetric", "contact")
-"""The repairs: space-time always runs; the others are compared beside it (config ``baselines``)."""
+REPAIRS = tuple(LABELS.values())
+"""The repairs: space-time always runs; the others are compared beside it (config ``repairs``)."""
 
 
 @dataclass
@@ -103,7 +104,7 @@ def repair_library(library=None, out=".", repairs=("space-time",), cores=2, conf
         raise PosefixError(f"repairs: {unknown[0]!r} is not a repair (one of {', '.join(REPAIRS)})")
     if cores < 1:
         raise PosefixError(f"cores={cores}: needs at least 1 core")
-    settings = nested(config or {}) | {"baselines": [r for r in REPAIRS[1:] if r in repairs]}
+    settings = nested(config or {}) | {"repairs": [r for r in REPAIRS[1:] if r in repairs]}
     if library is not None:
         settings["library"] = str(Path(library).resolve())
     out = Path(out).resolve()
@@ -224,7 +225,7 @@ def _outcome(name, results, reports, log_path):
     poses = []
     for entry in entries:
         kind, reason = entry_status(entry)
-        folders = {"space-time": "repaired"} | {repair: f"repaired-{repair}" for repair in entry.get("baselines", {})}
+        folders = {SPACETIME: "repaired"} | {repair: f"repaired-{repair}" for repair in entry.get("baselines", {})}
         meshes = {repair: sorted(results.glob(f"{folder}/{glob.escape(entry['pose'])}.*"))
                   for repair, folder in folders.items()}
         poses.append(PoseOutcome(entry["pose"], kind, reason, entry["intersecting_faces"],

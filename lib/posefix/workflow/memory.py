@@ -9,7 +9,7 @@ PEAK_MB = {
     "validate_reference": (115, 1.4), "validate": (113, 1.5), "keyframes": (118, 2.5), "classify": (104, 13.1),
     "constraints": (100, 3.5), "integrate": (188, 0.3), "verify": (63, 21.6), "export": (109, 2.0),
     "downstream": (310, 24.6), "skeleton": (133, 6.0), "repair_medial": (112, 6.3), "tet_mesh": (175, 0.8),
-    "repair_volumetric": (202, 22.3), "repair_contact": (64, 21.5), "export_baseline": (115, 1.9), "render": (141, 7.7),
+    "repair_volumetric": (202, 22.3), "repair_contact": (64, 21.5), "export_repair": (115, 1.9), "render": (141, 7.7),
     "viewer": (115, 1.7),
 }
 """Peak memory of each stage (Snakemake's max_rss) as MB at rest plus MB per 1000 reference vertices: the line

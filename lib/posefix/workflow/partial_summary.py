@@ -129,7 +129,7 @@ def partial_report(stage_script, folders, poses, errors, options):
     logs = f"{results}/logs"
     commands = [
         [sys.executable, stage_script("summary"), "--results", results, "--poses", ",".join(finished),
-         "--baselines", ",".join(repairs), "--distortion-limit", str(limit), *failed, "--out",
+         "--repairs", ",".join(repairs), "--distortion-limit", str(limit), *failed, "--out",
          f"{reports}/summary.json", "--markdown", f"{reports}/summary.md", "--log", f"{logs}/partial-summary.log"],
         [sys.executable, stage_script("overview"), "--summary", f"{reports}/summary.json", "--png",
          f"{reports}/overview.png", "--html", f"{reports}/summary.html", "--log", f"{logs}/partial-overview.log"],

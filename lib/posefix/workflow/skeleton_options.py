@@ -4,7 +4,7 @@ import numpy as np
 
 from posefix.workflow.cli import library_defaults
 from posefix.io.errors import InputError
-from posefix.skeletal.skeletal_mesh import skeletal_mesh
+from posefix.medial.skeletal_mesh import skeletal_mesh
 
 
 def add_skeleton_options(parser):

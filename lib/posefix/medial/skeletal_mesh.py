@@ -6,7 +6,7 @@ at ``x_i`` (``S`` has the surface's connectivity), with radius ``R_i = |x_i - s_
 
 1. Medial centres (``medial``): the inner Voronoi poles as in the paper (``"poles"``), the
    shrinking balls of Ma et al. 2012 (``"shrinking_ball"``), or (``"auto"``) the poles with every
-   missing or bad pole (:func:`~posefix.skeletal.quality.bad_centres`) replaced by the shrinking-ball
+   missing or bad pole (:func:`~posefix.medial.quality.bad_centres`) replaced by the shrinking-ball
    centre of its vertex, and where that is bad too, by the largest of the balls ``x - r n`` with
    ``r = R_sb / 2^k`` (k = 0..12) that is inside and does not cross the surface; when none passes,
    the inside one with the largest clearance (or ``R_sb / 2^12`` if none is inside), still flagged bad.
@@ -27,10 +27,10 @@ from posefix.mesh.geometry import bbox_diagonal, vertex_normals
 from posefix.mesh.laplacian import uniform_laplacian
 from posefix.mesh.topology import vertex_adjacency
 from posefix.mesh.winding import winding_numbers
-from posefix.skeletal.poles import inner_poles
+from posefix.medial.poles import inner_poles
 from posefix.mesh.distance import surface_distance_below
-from posefix.skeletal.quality import bad_centres
-from posefix.skeletal.shrinking_ball import shrinking_ball_centers
+from posefix.medial.quality import bad_centres
+from posefix.medial.shrinking_ball import shrinking_ball_centers
 from posefix.mesh.tolerances import TINY
 
 log = logging.getLogger(__name__)
@@ -82,7 +82,7 @@ def skeletal_mesh(V, F, medial="auto", smooth_iters=10, smooth_step=0.1, tol=0.5
     smooth_step : float
         Step of the flow (stable below 0.5 for the umbrella operator).
     tol : float
-        Crossing slack of :func:`~posefix.skeletal.quality.bad_centres`.
+        Crossing slack of :func:`~posefix.medial.quality.bad_centres`.
 
     Returns
     -------
@@ -142,7 +142,7 @@ def ray_centres(V, F, X, N, r_max, tol):
     r_max : (k,) float
         Largest radius tried.
     tol : float
-        Crossing slack (as in :func:`~posefix.skeletal.quality.bad_centres`).
+        Crossing slack (as in :func:`~posefix.medial.quality.bad_centres`).
 
     Returns
     -------

@@ -3,7 +3,7 @@
 import numpy as np
 
 from conftest import icosphere
-from posefix.skeletal.quality import bad_centres
+from posefix.medial.quality import bad_centres
 
 
 def test_the_true_centre_of_a_sphere_is_good_outside_and_too_large_balls_are_bad():

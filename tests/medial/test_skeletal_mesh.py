@@ -9,7 +9,7 @@ from posefix.mesh.laplacian import uniform_laplacian
 from posefix.mesh.primitives import capsule
 from posefix.mesh.topology import vertex_adjacency
 from posefix.io.meshes import read_mesh
-from posefix.skeletal.skeletal_mesh import (POLE, RAY, SHRINKING_BALL, SkeletalMesh, gated_bilaplacian_flow,
+from posefix.medial.skeletal_mesh import (POLE, RAY, SHRINKING_BALL, SkeletalMesh, gated_bilaplacian_flow,
                                             ray_centres, skeletal_mesh)
 
 

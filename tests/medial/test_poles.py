@@ -5,7 +5,7 @@ import numpy as np
 from conftest import icosphere
 from posefix.mesh.geometry import vertex_normals
 from posefix.mesh.primitives import capsule
-from posefix.skeletal.poles import inner_poles
+from posefix.medial.poles import inner_poles
 
 
 def _distance_to_segment(P, half):

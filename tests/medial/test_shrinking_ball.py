@@ -4,7 +4,7 @@ import numpy as np
 
 from conftest import grid_sheet, icosphere
 from posefix.mesh.primitives import capsule
-from posefix.skeletal.shrinking_ball import shrinking_ball_centers
+from posefix.medial.shrinking_ball import shrinking_ball_centers
 
 
 def test_balls_of_a_sphere_shrink_to_its_centre():

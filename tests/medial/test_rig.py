@@ -5,8 +5,8 @@ import numpy as np
 from conftest import ROOT
 from posefix.mesh.rotations import rotation_exp
 from posefix.workflow import demo
-from posefix.skeletal.rig_files import read_rig
-from posefix.skeletal.rig import (Rig, RigPose, blend_skin, blended_linear_maps, bone_distances, bone_transforms,
+from posefix.medial.rig_files import read_rig
+from posefix.medial.rig import (Rig, RigPose, blend_skin, blended_linear_maps, bone_distances, bone_transforms,
                                   pose_from_rotation_vectors, skinning_weights)
 
 LIMB = Rig(("root", "j1", "j2", "tip"), np.array([[-3.0, 0, 0], [-1, 0, 0], [1, 0, 0], [3, 0, 0]]),

@@ -5,7 +5,7 @@ import pytest
 
 from conftest import ROOT
 from posefix.io.errors import InputError
-from posefix.skeletal.rig_files import read_rig
+from posefix.medial.rig_files import read_rig
 
 
 def test_the_demo_rig_reads_with_its_joints_and_poses():

@@ -17,7 +17,7 @@ reference's skeletal mesh ``(S, R)`` and the target itself:
    differential coordinates, Eq. 3-5: a cotangent Poisson solve), the target outside ``D`` as boundary
    values: the skeleton-driven pose of the damaged part. The region grows (``reach = 1, 2, ...``) until this
    start has no new intersection.
-5. **Flow.** S1's medial-ball flow (:class:`~posefix.skeletal.flow.MedialBallFlow`) from that start, with
+5. **Flow.** S1's medial-ball flow (:class:`~posefix.medial.flow.MedialBallFlow`) from that start, with
    ``S_d`` as anchors, until no new intersection remains or ``max_iters``.
 
 Measured on the demo library (bends of 120-150 degrees): S1's flow started from the target itself, with the
@@ -41,8 +41,8 @@ from posefix.mesh.intersections import intersecting_faces, self_intersecting_pai
 from posefix.mesh.rotations import polar_decomposition
 from posefix.mesh.sparse import factorized
 from posefix.mesh.topology import vertex_adjacency
-from posefix.skeletal.flow import FlowResult, MedialBallFlow
-from posefix.skeletal.reconstruction import SkeletalReconstruction, triangle_frames
+from posefix.medial.flow import FlowResult, MedialBallFlow
+from posefix.medial.reconstruction import SkeletalReconstruction, triangle_frames
 
 log = logging.getLogger(__name__)
 
@@ -87,7 +87,7 @@ class MedialRepair:
     V : (n, 3) float
         The reference mesh ``M``; ``F`` (m, 3) int its faces.
     S : (n, 3) float
-        Its skeletal mesh (:func:`~posefix.skeletal.skeletal_mesh.skeletal_mesh`); radii ``R = |V - S|``.
+        Its skeletal mesh (:func:`~posefix.medial.skeletal_mesh.skeletal_mesh`); radii ``R = |V - S|``.
     margin : float
         Clearance kept by the flow between parts apart at rest (model units).
     tau : float
@@ -97,7 +97,7 @@ class MedialRepair:
     max_reach : int
         Largest damaged region tried, in ball radii (1, 2, ... up to it).
     min_area : float
-        See :class:`~posefix.skeletal.reconstruction.SkeletalReconstruction`.
+        See :class:`~posefix.medial.reconstruction.SkeletalReconstruction`.
 
     Examples
     --------

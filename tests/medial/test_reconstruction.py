@@ -6,9 +6,9 @@ import pytest
 from conftest import icosphere
 from posefix.mesh.geometry import bbox_diagonal
 from posefix.mesh.rotations import rotation_exp
-from posefix.skeletal.reconstruction import (SkeletalReconstruction, collapsed_faces, corner_cotangents,
+from posefix.medial.reconstruction import (SkeletalReconstruction, collapsed_faces, corner_cotangents,
                                              frame_maps, triangle_frames)
-from posefix.skeletal.skeletal_mesh import skeletal_mesh
+from posefix.medial.skeletal_mesh import skeletal_mesh
 
 
 @pytest.fixture(scope="module")

@@ -6,9 +6,9 @@ import pytest
 from posefix.mesh.geometry import bbox_diagonal
 from posefix.mesh.rotations import rotation_exp
 from posefix.workflow import demo
-from posefix.skeletal.authoring import VARIANTS, SkeletalPoser, union_error
-from posefix.skeletal.rig import Rig, RigPose
-from posefix.skeletal.skeletal_mesh import skeletal_mesh
+from posefix.medial.authoring import VARIANTS, SkeletalPoser, union_error
+from posefix.medial.rig import Rig, RigPose
+from posefix.medial.skeletal_mesh import skeletal_mesh
 
 LIMB = Rig(("root", "j1", "j2", "tip"), np.array([[-3.0, 0, 0], [-1, 0, 0], [1, 0, 0], [3, 0, 0]]),
            np.array([-1, 0, 1, 2]))

@@ -9,9 +9,9 @@ from posefix.mesh.geometry import bbox_diagonal
 from posefix.mesh.rotations import rotation_exp
 from posefix.workflow import demo
 from posefix.io.meshes import read_mesh, write_mesh
-from posefix.skeletal.flow import MedialBallFlow
-from posefix.skeletal.repair import MedialRepair, medial_repair
-from posefix.skeletal.skeletal_mesh import skeletal_mesh
+from posefix.medial.flow import MedialBallFlow
+from posefix.medial.repair import MedialRepair, medial_repair
+from posefix.medial.skeletal_mesh import skeletal_mesh
 
 BENT = demo.DemoPose("bent", ".obj", (0.0, 0.0, 0.0), (0.0, 0.0, np.radians(110.0)), np.radians(30.0))
 

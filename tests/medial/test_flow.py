@@ -8,11 +8,11 @@ from conftest import icosphere
 from posefix.mesh.geometry import bbox_diagonal
 from posefix.mesh.intersections import intersecting_faces, self_intersecting_pairs
 from posefix.mesh.primitives import capsule
-from posefix.skeletal.authoring import SkeletalPoser, union_error
-from posefix.skeletal.flow import MedialBallFlow, candidate_balls, nearest_balls, union_of_balls
-from posefix.skeletal.reconstruction import SkeletalReconstruction
-from posefix.skeletal.rig import Rig, pose_from_rotation_vectors
-from posefix.skeletal.skeletal_mesh import skeletal_mesh
+from posefix.medial.authoring import SkeletalPoser, union_error
+from posefix.medial.flow import MedialBallFlow, candidate_balls, nearest_balls, union_of_balls
+from posefix.medial.reconstruction import SkeletalReconstruction
+from posefix.medial.rig import Rig, pose_from_rotation_vectors
+from posefix.medial.skeletal_mesh import skeletal_mesh
 
 
 def test_union_of_two_balls_is_the_smaller_signed_distance():

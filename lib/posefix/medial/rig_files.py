@@ -13,7 +13,7 @@ import numpy as np
 
 from posefix.io.errors import InputError
 from posefix.io.files import read_yaml
-from posefix.skeletal.rig import Rig, pose_from_rotation_vectors
+from posefix.medial.rig import Rig, pose_from_rotation_vectors
 
 
 def read_rig(path):

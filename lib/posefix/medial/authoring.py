@@ -14,9 +14,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from posefix.mesh.rotations import polar_decomposition
-from posefix.skeletal.flow import FlowResult, MedialBallFlow, union_of_balls
-from posefix.skeletal.reconstruction import SkeletalReconstruction
-from posefix.skeletal.rig import blend_skin, blended_linear_maps, bone_transforms, skinning_weights
+from posefix.medial.flow import FlowResult, MedialBallFlow, union_of_balls
+from posefix.medial.reconstruction import SkeletalReconstruction
+from posefix.medial.rig import blend_skin, blended_linear_maps, bone_transforms, skinning_weights
 
 log = logging.getLogger(__name__)
 
@@ -32,10 +32,10 @@ class SkeletalPoser:
     V : (n, 3) float
     F : (m, 3) int
     S : (n, 3) float
-        The skeletal mesh of ``V`` (:func:`posefix.skeletal.skeletal_mesh.skeletal_mesh`).
+        The skeletal mesh of ``V`` (:func:`posefix.medial.skeletal_mesh.skeletal_mesh`).
     rig : Rig
     falloff : float
-        Skinning blend length relative to the mean bone length (:func:`~posefix.skeletal.rig.skinning_weights`).
+        Skinning blend length relative to the mean bone length (:func:`~posefix.medial.rig.skinning_weights`).
     min_sine : float
         Skeletal triangles with a smaller corner sine take the rig's blended rotation as frame map.
     min_area : float
@@ -75,7 +75,7 @@ class SkeletalPoser:
         ----------
         pose : RigPose
         margin : float
-            The flow's margin (model units; see :mod:`posefix.skeletal.flow`).
+            The flow's margin (model units; see :mod:`posefix.medial.flow`).
         tau : float
             The flow's step size.
         neighbours : int

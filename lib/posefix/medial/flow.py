@@ -2,7 +2,7 @@
 
 The union of the balls ``(s_j^d, R_j)`` is ``f(z) = min_j |z - s_j^d| - R_j`` (Eq. 6). The flow is the
 semi-implicit step ``x <- x + tau (I + L)^-1 F(x)`` (Eq. 9: the operator of Eq. 4 with the skeletal vertices
-as fixed anchors, prefactorized by :class:`~posefix.skeletal.reconstruction.SkeletalReconstruction`), with
+as fixed anchors, prefactorized by :class:`~posefix.medial.reconstruction.SkeletalReconstruction`), with
 ``F = -f grad f`` (the antigradient of f^2 / 2) from the nearest ball of Eq. 10: for vertex ``i`` the ball
 ``p`` minimising ``|x_i - s_p^d| - R_p`` over the vertices ``p`` within ``R_i`` of ``x_i`` (a kd-tree of the
 moving vertices, rebuilt every iteration). (Eq. 10 as printed drops the sign and the normalisation of
