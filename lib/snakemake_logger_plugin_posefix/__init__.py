@@ -3,7 +3,8 @@ one JSON object a line, appended to the file that ``--logger-posefix-events`` na
 ``/dev/fd/N``).
 
 ``snakemake --logger posefix --logger-posefix-events events.jsonl`` runs it by hand; Snakemake's own output is
-unchanged (it neither writes to the terminal nor replaces Snakemake's log file).
+unchanged (it neither writes to the terminal nor replaces Snakemake's log file). Importing it imports no posefix module:
+Snakemake imports every installed logger plugin when it starts, for any workflow.
 """
 
 import json
@@ -12,8 +13,6 @@ from typing import Optional
 
 from snakemake_interface_logger_plugins.base import LogHandlerBase
 from snakemake_interface_logger_plugins.settings import LogHandlerSettingsBase
-
-from posefix.workflow.events import snakemake_event
 
 
 @dataclass
@@ -27,11 +26,13 @@ class LogHandler(LogHandlerBase):
     at once (the command shows the progress as it comes)."""
 
     def __post_init__(self):
+        from posefix.workflow.events import snakemake_event  # (here: Snakemake imports every installed plugin)
+        self.event = snakemake_event
         path = self.settings.events if self.settings is not None else None
         self.stream = open(path, "a", encoding="utf-8", buffering=1) if path else None
 
     def emit(self, record):
-        event = snakemake_event(record)
+        event = self.event(record)
         if event is not None and self.stream is not None:
             self.stream.write(json.dumps(event, default=str) + "\n")
 

@@ -4,6 +4,8 @@ the ``posefix`` command makes of what the plugin writes."""
 
 import json
 import logging
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -33,6 +35,12 @@ def through_plugin(records, tmp_path):
 
 def test_snakemake_finds_the_plugin_by_its_name():
     assert LoggerPluginRegistry().get_plugin("posefix").log_handler is LogHandler
+
+
+def test_importing_the_plugin_imports_no_posefix_module():
+    """Snakemake imports every installed logger plugin when it starts, whatever the workflow: not posefix then."""
+    code = "import sys, snakemake_logger_plugin_posefix; print(sorted(m for m in sys.modules if 'posefix.' in m))"
+    assert subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout == "[]\n"
 
 
 def test_a_failed_run_gives_its_progress_and_the_failed_jobs_error_lines(tmp_path):
