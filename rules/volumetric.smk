@@ -1,5 +1,5 @@
 # The volumetric method (S4): the reference's tet mesh once per library (S4 §2.1), then per pose the volumetric
-# repair (the iterative editor fills the free region, posefix.volumetric.fill; config volumetric.repair), compared
+# repair (the iterative editor fills the free region, posefix.volumetric.repair; config volumetric.repair), compared
 # beside space-time when config `repairs` names it. And pose authoring: a reference mesh and a pose script -> a pose
 # library (stages/volumetric_pose.py, config volumetric.pose), or marker tracks -> an animated pose library
 # (stages/volumetric_animate.py, config volumetric.animate). Not part of `rule all`: run `snakemake volumetric_pose`

@@ -1,10 +1,10 @@
-"""Stage repair_volumetric: the volumetric fill of one pose (the volumetric editor, S4 §2), compared beside space-time.
+"""Stage repair_volumetric: the volumetric repair of one pose (the volumetric editor, S4 §2), compared beside space-time.
 
 The target's V_C vertices (stage classify) become point handles of the reference's tet mesh (stage
 tet_mesh) at their target positions; the editor's iterations fill the free region, its transfer (S4 §2.4) gives the
 surface.
 The free region grows by rings until no new self-intersection remains (intersections the reference has
-too do not count). See ``posefix.volumetric.fill``.
+too do not count). See ``posefix.volumetric.repair``.
 """
 
 import posefix.workflow.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; runtime defaults before numpy)
@@ -14,7 +14,7 @@ from posefix.workflow.cli import library_defaults, run_stage, stage_parser
 from posefix.io.errors import InputError
 from posefix.io.library import read_welded_pair
 from posefix.workflow.timings import Timings
-from posefix.volumetric.fill import VolumetricFill
+from posefix.volumetric.repair import VolumetricRepair
 
 DOCS = {
     "start": ("length", "the target pose, (n, 3) float64"),
@@ -27,7 +27,7 @@ DOCS = {
 
 def build_parser():
     parser = stage_parser("repair_volumetric", __doc__)
-    defaults = library_defaults(VolumetricFill.repair)
+    defaults = library_defaults(VolumetricRepair.repair)
     parser.add_argument("--reference", required=True, help="reference mesh file")
     parser.add_argument("--target", required=True, help="target pose file")
     parser.add_argument("--classify", required=True, help="classify.h5 of the pose (its mask is V_C)")
@@ -58,7 +58,7 @@ def main(args, log):
     if not mask.any():
         raise InputError(args.classify, "V_C is empty: nothing holds the tets")
     with timings.step("prepare"):
-        fill = VolumetricFill(V, F, tets["X"], tets["T"])
+        fill = VolumetricRepair(V, F, tets["X"], tets["T"])
     with timings.step("repair"):
         result = fill.repair(X, mask, args.iterations, args.point_weight, args.max_rings, args.max_free)
     final = int(result.new_faces.sum())

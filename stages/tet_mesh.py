@@ -1,7 +1,7 @@
 """Stage tet_mesh: the coarse tet mesh of the reference (S4 §2.1), once per library.
 
 Quadric decimation, then a Delaunay tetrahedralization kept inside the reference by its winding number
-(``posefix.volumetric.tet_mesh``). The volumetric fill (stage repair_volumetric) poses these tets in every
+(``posefix.volumetric.tet_mesh``). The volumetric repair (stage repair_volumetric) poses these tets in every
 target pose.
 """
 

@@ -199,7 +199,7 @@ CONFIG = [
     for entry, line in [
         ("fit.batch=0", "fit.batch: 0 is less than the minimum of 1"),
         ("verify.finish=rigid", "verify.finish: 'rigid' is not one of 'contact', 'snap'"),
-        ("repairs=[medial,shape]", "baselines.1: 'shape' is not one of 'medial', 'volumetric', 'contact'"),
+        ("repairs=[medial,shape]", "repairs.1: 'shape' is not one of 'medial', 'volumetric', 'contact'"),
         ("downstream.alphas=abc", "downstream.alphas.0: 'abc' is not of type number"),
         ("fitt.batch=64", "fitt: unknown key (did you mean 'fit'?)"),
         ("fit.eps_rel=-1", "fit.eps_rel: -1.0 is less than the minimum of 0"),

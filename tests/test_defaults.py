@@ -31,7 +31,7 @@ from posefix.medial.rig import skinning_weights
 from posefix.medial.skeletal_mesh import skeletal_mesh
 from posefix.spacetime.classification import constraint_mask
 from posefix.volumetric.authoring import VolumetricPoser
-from posefix.volumetric.fill import VolumetricFill
+from posefix.volumetric.repair import VolumetricRepair
 from posefix.volumetric.markers import MarkerAnimator
 from posefix.volumetric.tet_mesh import tet_mesh
 from posefix.spacetime.constraints import knot_tangents, spacetime_constraints
@@ -120,7 +120,7 @@ LIBRARY = {
     ("volumetric.pose", "iterations"): [(VolumetricPoser.pose, "iterations", None)],
     ("volumetric.pose", "frames"): [(VolumetricPoser.pose, "frames", None)],
     ("volumetric.repair", "tet_vertices"): [(tet_mesh, "surface_vertices", None)],
-    **{("volumetric.repair", key): [(VolumetricFill.repair, key, None)]
+    **{("volumetric.repair", key): [(VolumetricRepair.repair, key, None)]
        for key in ("iterations", "point_weight", "max_rings", "max_free")},
     ("volumetric.animate", "tet_vertices"): [(tet_mesh, "surface_vertices", None)],
     ("volumetric.animate", "iterations"): [(MarkerAnimator.animate, "iterations", None)],

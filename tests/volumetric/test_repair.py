@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from posefix.mesh.rotations import rotation_exp
-from posefix.volumetric.fill import VolumetricFill
+from posefix.volumetric.repair import VolumetricRepair
 from posefix.volumetric.shapes import tet_grid
 from posefix.volumetric.transfer import boundary_faces
 
@@ -27,7 +27,7 @@ def test_a_rigid_motion_comes_back_with_the_free_region_in_place(bar):
     V, F, X, T = bar
     target = moved(V)
     free = (V[:, 0] > 1.0) & (V[:, 0] < 2.0) & (V[:, 2] == 1.0)
-    X_free, edit, _ = VolumetricFill(V, F, X, T).fill(target, free, iterations=40)
+    X_free, edit, _ = VolumetricRepair(V, F, X, T).fill(target, free, iterations=40)
     assert np.abs(X_free - target).max() <= 1e-6 and edit.shear[-1] <= 1e-6
 
 
@@ -36,7 +36,7 @@ def test_a_dent_pushed_through_the_bar_is_filled_without_new_intersections(bar):
     dent = (V[:, 0] > 1.0) & (V[:, 0] < 2.0) & (V[:, 2] == 1.0)
     pushed = V.copy()
     pushed[dent, 2] -= 1.5  # the top's middle pushed out through the bottom
-    fill = VolumetricFill(V, F, X, T)
+    fill = VolumetricRepair(V, F, X, T)
     assert fill.intersecting(moved(pushed)).any()
     result = fill.repair(moved(pushed), constrained=~dent, iterations=40)
     assert result.target_faces > 0 and not result.new_faces.any() and result.rings == 0

@@ -1,4 +1,4 @@
-"""The volumetric fill, a third repair beside S0: the free region of a target rebuilt by S4's editor.
+"""The volumetric repair, compared beside space-time: the free region of a target rebuilt by the volumetric editor (S4 §2).
 
 S0 keeps the vertices of ``V_C`` (stage classify: away from the target's self-intersections) and replaces
 the rest. Here the ``V_C`` vertices become soft point handles of the reference's coarse tet mesh at their
@@ -32,8 +32,8 @@ log = logging.getLogger(__name__)
 
 
 @dataclass
-class FillResult:
-    """Outcome of :meth:`VolumetricFill.repair`.
+class VolumetricResult:
+    """Outcome of :meth:`VolumetricRepair.repair`.
 
     Attributes
     ----------
@@ -69,7 +69,7 @@ class FillResult:
     seconds: float
 
 
-class VolumetricFill:
+class VolumetricRepair:
     """Fill the free region of targets with S4's editor on the reference's tet mesh; precomputes the transfer.
 
     Parameters
@@ -83,7 +83,7 @@ class VolumetricFill:
 
     Examples
     --------
-    >>> fill = VolumetricFill(V, F, *tet_mesh(V, F))              # doctest: +SKIP
+    >>> fill = VolumetricRepair(V, F, *tet_mesh(V, F))              # doctest: +SKIP
     >>> result = fill.repair(target, constrained=mask)            # doctest: +SKIP
     """
 
@@ -118,7 +118,7 @@ class VolumetricFill:
     def repair(self, target, constrained, iterations=10, point_weight=10.0, max_rings=16, max_free=0.5):
         """Fill the free vertices of ``target`` (n, 3), ``~constrained`` ((n,) bool: ``V_C``), grown by 0, 1, 2,
         4, ... ``max_rings`` rings until no new intersection remains (else the try with the fewest):
-        a :class:`FillResult`. A grown region of more than ``max_free`` of the vertices is not tried (the
+        a :class:`VolumetricResult`. A grown region of more than ``max_free`` of the vertices is not tried (the
         fill would undo the pose, not repair it). ``iterations``, ``point_weight``: see :meth:`fill`."""
         start = time.perf_counter()
         target_faces = int((self.intersecting(target) & ~self.reference_faces).sum())
@@ -137,5 +137,5 @@ class VolumetricFill:
             if not new.any():
                 break
         X, edit, residual, free, rings, faces, new = best
-        return FillResult(X, edit.X, edit.shear, residual, free, rings, faces, new, target_faces,
+        return VolumetricResult(X, edit.X, edit.shear, residual, free, rings, faces, new, target_faces,
                           time.perf_counter() - start)
