@@ -7,15 +7,17 @@ tolerated). See ``posefix.contact.keyframe_tracking``.
 """
 
 import posefix.workflow.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; runtime defaults before numpy)
+from dataclasses import asdict
+
 import numpy as np
 
 from posefix.contact.keyframe_tracking import track_keyframes
-from posefix.mesh.contact_solver import ContactSolver
+from posefix.mesh.contact_solver import ContactSettings, ContactSolver
 from posefix.mesh.geometry import unit_scale
 from posefix.mesh.intersections import intersecting_faces
 from posefix.io.artifacts import read_artifact, write_artifact
 from posefix.workflow.cli import run_stage, stage_parser
-from posefix.workflow.contact_options import add_contact_options, contact_settings
+from posefix.workflow.settings import add_settings_options, settings_from
 from posefix.workflow.timings import Timings
 from posefix.spacetime.classification import split_frames
 
@@ -33,7 +35,7 @@ def build_parser():
     parser.add_argument("--keyframes", required=True, help="keyframes.h5 of the pose (frames, faces)")
     parser.add_argument("--classify", required=True, help="classify.h5 of the pose (the reference's intersections)")
     parser.add_argument("--out", required=True, help="contact.h5 to write")
-    add_contact_options(parser)
+    add_settings_options(parser, ContactSettings, "contact solver (config contact)")
     return parser
 
 
@@ -46,7 +48,8 @@ def main(args, log):
     unit = unit_scale(frames[0])  # the working unit: a library at 1e-30 or 1e+30 repairs as at 1
     reference_pairs = split_frames(cl["pairs"], cl["pair_offsets"])[0]
     reference_faces = intersecting_faces(reference_pairs, len(F))
-    settings, params = contact_settings(args)
+    settings = settings_from(vars(args), ContactSettings)
+    params = asdict(settings)
     with timings.step("prepare"):
         solver = ContactSolver(unit * frames[0], F, reference_pairs, settings, args.threads)
     with timings.step("repair"):

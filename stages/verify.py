@@ -16,10 +16,11 @@ from dataclasses import asdict
 
 import posefix.workflow.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; runtime defaults before numpy)
 
+from posefix.mesh.contact_solver import ContactSettings
 from posefix.mesh.geometry import unit_scale
 from posefix.io.artifacts import read_artifact, write_artifact
 from posefix.workflow.cli import run_stage, stage_parser
-from posefix.workflow.contact_options import add_contact_options
+from posefix.workflow.settings import add_settings_options
 from posefix.workflow.timings import Timings
 from posefix.verify.contact_finish import FinishSettings
 from posefix.verify.flags import describe_flags
@@ -83,7 +84,7 @@ def build_parser():
     parser.add_argument("--reproduce", action=argparse.BooleanOptionalAction, default=defaults.reproduce,
                         help="snap finish: put the constrained vertices exactly on their targets (else keep the "
                         "integrated positions)")
-    add_contact_options(parser)
+    add_settings_options(parser, ContactSettings, "contact solver (config contact)")
     return parser
 
 

@@ -27,7 +27,7 @@ goals, :meth:`ContactSolver.compute_path` carries one through a sequence of pose
 import logging
 import time
 from contextlib import contextmanager
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import ipctk
 import numpy as np
@@ -78,14 +78,25 @@ class ContactSettings:
     max_iterations : int
         Newton iterations at most: where many contacts hold the free region, the elastic finish creeps along them
         (cat-04, cat-08: converged in 275 and 248).
+
+    Each field's ``metadata`` (its help, unit and bounds) is the one declaration of the setting: the stages' options,
+    config ``contact``'s schema and docs/configuration.md come from it (``posefix.workflow.settings``).
     """
 
-    dhat: float = 1e-3
-    dhat_min: float = 2e-4
-    touching: float = 1e-9
-    smoothing: float = 0.02
-    tolerance: float = 1e-3
-    max_iterations: int = 400
+    dhat: float = field(default=1e-3, metadata={
+        "help": "largest barrier activation distance (half the reference's clearance when smaller)", "unit": "d",
+        "exclusiveMinimum": 0})
+    dhat_min: float = field(default=2e-4, metadata={
+        "help": "smallest barrier activation distance (parts closer at rest feel the barrier)", "unit": "d",
+        "exclusiveMinimum": 0})
+    touching: float = field(default=1e-9, metadata={
+        "help": "pairs of the reference closer than this are tolerated (touching at rest)", "unit": "d", "minimum": 0})
+    smoothing: float = field(default=0.02, metadata={
+        "help": "smoothing length of the bi-Laplacian term", "unit": "d", "minimum": 0})
+    tolerance: float = field(default=1e-3, metadata={
+        "help": "Newton stops when its step moves no vertex farther than this", "unit": "d", "exclusiveMinimum": 0})
+    max_iterations: int = field(default=400, metadata={
+        "help": "Newton iterations at most per solve", "minimum": 1})
 
 
 @dataclass

@@ -1,0 +1,54 @@
+"""Settings declared once: a dataclass whose fields carry their default, help, unit and bounds (``metadata``) gives
+a stage its command-line options, the config schema its section, and so docs/configuration.md its table; the
+library's default is the field's (issue 51: one place per setting).
+
+A field's metadata: ``help`` (str, lower case, no full stop), optionally ``unit`` (a key of :data:`UNITS`) and
+JSON-schema bounds (:data:`BOUNDS`).
+
+Examples
+--------
+>>> from dataclasses import dataclass, field
+>>> @dataclass
+... class Demo:
+...     step: float = field(default=0.5, metadata={"help": "step of the flow", "unit": "d", "exclusiveMinimum": 0})
+>>> schema_properties(Demo)
+{'step': {'type': 'number', 'exclusiveMinimum': 0, 'default': 0.5, 'description': 'Step of the flow, relative to the bbox diagonal d.'}}
+"""
+
+from dataclasses import fields
+
+UNITS = {"d": "relative to the bbox diagonal d"}
+"""What a setting's ``unit`` says, in words."""
+
+BOUNDS = ("minimum", "exclusiveMinimum", "maximum", "exclusiveMaximum")
+"""The JSON-schema bounds a field's metadata may give."""
+
+_TYPES = {float: ("number", float), int: ("integer", int), "float": ("number", float), "int": ("integer", int)}
+
+
+def add_settings_options(parser, cls, title):
+    """Add an option group ``title`` (str) to ``parser`` (argparse.ArgumentParser) with one option per field of the
+    dataclass ``cls``: ``--name-with-dashes``, its type, default and help (with its unit)."""
+    group = parser.add_argument_group(title)
+    for f in fields(cls):
+        unit = f.metadata.get("unit")
+        group.add_argument(f"--{f.name.replace('_', '-')}", type=_TYPES[f.type][1], default=f.default,
+                           help=f.metadata["help"] + (f", {UNITS[unit]}" if unit else ""))
+
+
+def settings_from(options, cls):
+    """An instance of the dataclass ``cls`` from ``options`` (a mapping holding its fields by name: a stage's
+    ``vars(args)``, or a config section)."""
+    return cls(**{f.name: options[f.name] for f in fields(cls)})
+
+
+def schema_properties(cls):
+    """The config schema's properties of the dataclass ``cls``: per field its type, bounds, default and description
+    (dict, key order as the committed schema writes them)."""
+    out = {}
+    for f in fields(cls):
+        unit, text = f.metadata.get("unit"), f.metadata["help"]
+        out[f.name] = {"type": _TYPES[f.type][0], **{b: f.metadata[b] for b in BOUNDS if b in f.metadata},
+                       "default": f.default,
+                       "description": text[0].upper() + text[1:] + (f", {UNITS[unit]}" if unit else "") + "."}
+    return out

@@ -1,0 +1,33 @@
+"""The settings declared by dataclasses (posefix.workflow.settings) are the schema's, the stages' options and the
+library's defaults at once."""
+
+import argparse
+from dataclasses import fields
+
+import pytest
+
+from conftest import ROOT
+from posefix.workflow.config_schema import DECLARED, declared_schema
+from posefix.workflow.settings import add_settings_options, schema_properties, settings_from
+
+
+def test_the_committed_schema_is_what_the_declarations_give():
+    text = (ROOT / "schemas" / "config.schema.yaml").read_text()
+    assert declared_schema(text) == text, (
+        "schemas/config.schema.yaml is stale: python -m posefix.workflow.config_schema schemas/config.schema.yaml")
+
+
+@pytest.mark.parametrize("section", sorted(DECLARED))
+def test_a_declared_section_gives_options_with_its_defaults_help_and_unit(section):
+    cls = DECLARED[section]
+    parser = argparse.ArgumentParser()
+    add_settings_options(parser, cls, section)
+    assert settings_from(vars(parser.parse_args([])), cls) == cls()  # the library's defaults
+    options = {action.dest: action for action in parser._actions if action.dest != "help"}
+    properties = schema_properties(cls)
+    assert set(options) == set(properties) == {f.name for f in fields(cls)}
+    for f in fields(cls):
+        text = f.metadata["help"]
+        assert options[f.name].default == properties[f.name]["default"] == f.default
+        assert options[f.name].help.startswith(text) and properties[f.name]["description"][1:].startswith(text[1:])
+        assert ("bbox diagonal" in options[f.name].help) == ("bbox diagonal" in properties[f.name]["description"])
