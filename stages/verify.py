@@ -10,7 +10,6 @@ and repaired pose ("new": intersecting in the repaired pose, not in the referenc
 deviation from the target over V_C and the rest. Stage ``export`` writes the mesh.
 """
 
-import argparse
 import json
 from dataclasses import asdict
 
@@ -41,49 +40,13 @@ DOCS = {
 
 def build_parser():
     parser = stage_parser("verify", __doc__)
-    defaults = RepairSettings()
     parser.add_argument("--keyframes", required=True, help="keyframes.h5 of the pose (reference, target, faces)")
     parser.add_argument("--classify", required=True, help="classify.h5 of the pose (V_C, reference intersections)")
     parser.add_argument("--integrate", required=True, help="integrate.h5 of the pose")
     parser.add_argument("--fit", required=True, help="fit.h5 of the pose (eps)")
     parser.add_argument("--out", required=True, help="verify.h5 to write")
-    finish = FinishSettings()
-    parser.add_argument("--finish", choices=["contact", "snap"], default=defaults.finish,
-                        help="contact: the contact solver moves V_C onto its targets, no new intersection can form; "
-                        "snap: snap V_C, fall back to the target and untangle")
-    parser.add_argument("--free-goal", choices=["elastic", "blend", "target", "integrated"], default=finish.free_goal,
-                        help="contact finish: what moves the free region: elastic (a discrete shell and face areas with the "
-                        "target's shape as rest state, pulled toward the target), or a positional goal: blend (the target's "
-                        "positions with the integrated pose's shape below the smoothing length), target, or integrated "
-                        "(the integrated pose plus the blended V_C residual)")
-    parser.add_argument("--constrained-weight", type=float, default=finish.constrained_weight,
-                        help="contact finish: weight of V_C on its targets relative to the free region's")
-    parser.add_argument("--untangle-rings", type=int, default=finish.untangle_rings,
-                        help="contact finish: most rings (0, 1, 2, 4, ...) around the reference's own intersections "
-                        "that the target has undone, put onto the target")
-    parser.add_argument("--elastic-weight", type=float, default=finish.elastic_weight,
-                        help="elastic finish: weight of the free region's pull toward the target (the elastic energy's is 1)")
-    parser.add_argument("--bending", type=float, default=finish.bending,
-                        help="elastic finish: bending stiffness k_b of the shell (stretching's and areas' are 1)")
-    parser.add_argument("--rest-limit", type=float, default=finish.rest_limit,
-                        help="elastic finish: the rest state's edge lengths and face areas are the target's within this "
-                        "ratio of the reference's (below summary.distortion_limit, where a face counts as distorted)")
-    parser.add_argument("--tracked-iterations", type=int, default=finish.tracked_iterations,
-                        help="elastic finish: Newton iterations at most per key frame of the tracked start")
-    parser.add_argument("--fallback-eps", type=float, default=defaults.fallback_eps,
-                        help="vertices farther than this many eps from their targets have not reached them")
-    parser.add_argument("--fallback-fit", type=float, default=defaults.fallback_fit,
-                        help="constrained vertices within this many fit max errors (at least the threshold above) of their "
-                        "targets are put on them")
-    parser.add_argument("--ring", type=int, default=defaults.ring,
-                        help="rings grown around fallback triggers (first attempt)")
-    parser.add_argument("--max-rings", type=int, default=defaults.max_rings,
-                        help="most rings tried around new intersections")
-    parser.add_argument("--repair-new", action=argparse.BooleanOptionalAction, default=defaults.repair_new,
-                        help="snap finish: replace regions with new intersections by the target")
-    parser.add_argument("--reproduce", action=argparse.BooleanOptionalAction, default=defaults.reproduce,
-                        help="snap finish: put the constrained vertices exactly on their targets (else keep the "
-                        "integrated positions)")
+    add_settings_options(parser, RepairSettings, "finish (config verify)")
+    add_settings_options(parser, FinishSettings, "contact finish (config verify)")
     add_settings_options(parser, ContactSettings, "contact solver (config contact)")
     return parser
 

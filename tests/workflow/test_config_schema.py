@@ -17,11 +17,10 @@ def test_the_committed_schema_is_what_the_declarations_give():
         "schemas/config.schema.yaml is stale: python -m posefix.workflow.config_schema schemas/config.schema.yaml")
 
 
-@pytest.mark.parametrize("section", sorted(DECLARED))
-def test_a_declared_section_gives_options_with_its_defaults_help_and_unit(section):
-    cls = DECLARED[section]
+@pytest.mark.parametrize("cls", [cls for classes in DECLARED.values() for cls in classes], ids=lambda c: c.__name__)
+def test_a_declared_section_gives_options_with_its_defaults_help_and_unit(cls):
     parser = argparse.ArgumentParser()
-    add_settings_options(parser, cls, section)
+    add_settings_options(parser, cls, cls.__name__)
     assert settings_from(vars(parser.parse_args([])), cls) == cls()  # the library's defaults
     options = {action.dest: action for action in parser._actions if action.dest != "help"}
     properties = schema_properties(cls)

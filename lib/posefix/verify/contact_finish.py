@@ -34,7 +34,7 @@ toward its goal, through intersection-free shapes only (:mod:`posefix.mesh.conta
 
 import logging
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from scipy.sparse.csgraph import connected_components
@@ -96,13 +96,28 @@ class FinishSettings:
         lion-07 has 12 instead of 7.
     """
 
-    free_goal: str = "elastic"
-    constrained_weight: float = 1e6
-    untangle_rings: int = 16
-    elastic_weight: float = 0.3
-    bending: float = 1.0
-    rest_limit: float = 2.0
-    tracked_iterations: int = 20
+    free_goal: str = field(default="elastic", metadata={
+        "help": "contact finish: what moves the free region: elastic (a discrete shell and face areas with the "
+                "target's shape as rest state, pulled toward the target), or a positional goal: blend (the target's "
+                "positions with the integrated pose's shape below the smoothing length), target, or integrated (the "
+                "integrated pose plus the blended V_C residual)", "choices": ("elastic", "blend", "target", "integrated")})
+    constrained_weight: float = field(default=1e6, metadata={
+        "help": "contact finish: weight of V_C on its targets relative to the free region's", "exclusiveMinimum": 0})
+    untangle_rings: int = field(default=16, metadata={
+        "help": "contact finish: most rings (0, 1, 2, 4, ...) around the reference's own intersections that the "
+                "target has undone, put onto the target", "minimum": 0})
+    elastic_weight: float = field(default=0.3, metadata={
+        "help": "elastic finish: weight of the free region's pull toward the target's positions (the elastic energy's "
+                "is 1)", "exclusiveMinimum": 0})
+    bending: float = field(default=1.0, metadata={
+        "help": "elastic finish: bending stiffness k_b of the shell (stretching's and areas' are 1)", "minimum": 0})
+    rest_limit: float = field(default=2.0, metadata={
+        "help": "elastic finish: the rest state's edge lengths and face areas are the target's clipped to within this "
+                "ratio of the reference's (below summary.distortion_limit, where a face counts as distorted)",
+        "exclusiveMinimum": 1})
+    tracked_iterations: int = field(default=20, metadata={
+        "help": "elastic finish: Newton iterations at most per key frame of the start tracked through the key frames",
+        "minimum": 1})
 
 
 @dataclass(frozen=True)

@@ -19,7 +19,7 @@ the contact solver moves the integrated pose, and no new intersection can form) 
 
 import logging
 import time
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, field, fields
 
 import numpy as np
 
@@ -58,13 +58,24 @@ class RepairSettings:
         Snap; False keeps the integrated positions of ``V_C``.
     """
 
-    finish: str = "contact"
-    fallback_eps: float = 100.0
-    fallback_fit: float = 2.0
-    ring: int = 1
-    max_rings: int = 6
-    repair_new: bool = True
-    reproduce: bool = True
+    finish: str = field(default="contact", metadata={
+        "help": "how V_C reaches its targets: contact (the contact solver moves it there, no new intersection can "
+                "form) or snap (snap V_C, fall back to the target and untangle)", "choices": ("contact", "snap")})
+    fallback_eps: float = field(default=100.0, metadata={
+        "help": "snap finish: vertices farther than this many eps from their targets have not reached them",
+        "exclusiveMinimum": 0})
+    fallback_fit: float = field(default=2.0, metadata={
+        "help": "snap finish: constrained vertices within this many fit max errors (at least the threshold above) of "
+                "their targets are put on them", "minimum": 0})
+    ring: int = field(default=1, metadata={"help": "snap finish: rings grown around fallback triggers (first attempt)",
+                                           "minimum": 0})
+    max_rings: int = field(default=6, metadata={"help": "snap finish: most rings tried around new intersections",
+                                                "minimum": 0})
+    repair_new: bool = field(default=True, metadata={
+        "help": "snap finish: replace regions with new intersections by the target and untangle them"})
+    reproduce: bool = field(default=True, metadata={
+        "help": "snap finish: put the constrained vertices exactly on their targets (else keep the integrated "
+                "positions)"})
 
 
 @dataclass

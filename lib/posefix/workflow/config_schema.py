@@ -10,21 +10,24 @@ import sys
 import yaml
 
 from posefix.mesh.contact_solver import ContactSettings
+from posefix.verify.contact_finish import FinishSettings
+from posefix.verify.sequence import RepairSettings
 from posefix.workflow.settings import schema_properties
 
-DECLARED = {"contact": ContactSettings}
-"""Config section -> the dataclass that declares its settings (the section may hold other keys: nested sections)."""
+DECLARED = {"contact": (ContactSettings,), "verify": (RepairSettings, FinishSettings)}
+"""Config section -> the dataclasses that declare its settings (the section may hold other keys: a rule's threads, nested
+sections)."""
 
 
 def declared_schema(text):
     """The schema's ``text`` (str) with the properties of the :data:`DECLARED` sections as their dataclasses give
     them, str; every other line unchanged."""
     lines = text.splitlines(keepends=True)
-    for section, cls in DECLARED.items():
+    for section, classes in DECLARED.items():
         start = lines.index(f"  {section}:\n")
         end = next((k for k in range(start + 1, len(lines)) if lines[k].startswith("  ") and lines[k][2] != " "),
                    len(lines))
-        for name, prop in schema_properties(cls).items():
+        for name, prop in [item for cls in classes for item in schema_properties(cls).items()]:
             k = next(k for k in range(start, end) if lines[k].startswith(f"      {name}: "))
             flow = yaml.safe_dump(prop, default_flow_style=True, sort_keys=False, width=10 ** 6).strip()
             lines[k] = f"      {name}: {flow}\n"

@@ -2,8 +2,8 @@
 a stage its command-line options, the config schema its section, and so docs/configuration.md its table; the
 library's default is the field's (issue 51: one place per setting).
 
-A field's metadata: ``help`` (str, lower case, no full stop), optionally ``unit`` (a key of :data:`UNITS`) and
-JSON-schema bounds (:data:`BOUNDS`).
+A field's metadata: ``help`` (str, lower case, no full stop), optionally ``unit`` (a key of :data:`UNITS`),
+JSON-schema bounds (:data:`BOUNDS`) and, for a str, its ``choices``. A bool is a ``--name``/``--no-name`` pair.
 
 Examples
 --------
@@ -15,6 +15,7 @@ Examples
 {'step': {'type': 'number', 'exclusiveMinimum': 0, 'default': 0.5, 'description': 'Step of the flow, relative to the bbox diagonal d.'}}
 """
 
+import argparse
 from dataclasses import fields
 
 UNITS = {"d": "relative to the bbox diagonal d"}
@@ -23,7 +24,7 @@ UNITS = {"d": "relative to the bbox diagonal d"}
 BOUNDS = ("minimum", "exclusiveMinimum", "maximum", "exclusiveMaximum")
 """The JSON-schema bounds a field's metadata may give."""
 
-_TYPES = {float: ("number", float), int: ("integer", int), "float": ("number", float), "int": ("integer", int)}
+_TYPES = {float: ("number", float), int: ("integer", int), bool: ("boolean", None), str: ("string", str)}
 
 
 def add_settings_options(parser, cls, title):
@@ -31,8 +32,9 @@ def add_settings_options(parser, cls, title):
     dataclass ``cls``: ``--name-with-dashes``, its type, default and help (with its unit)."""
     group = parser.add_argument_group(title)
     for f in fields(cls):
-        unit = f.metadata.get("unit")
-        group.add_argument(f"--{f.name.replace('_', '-')}", type=_TYPES[f.type][1], default=f.default,
+        unit, kind = f.metadata.get("unit"), _TYPES[_type(f)][1]
+        how = {"action": argparse.BooleanOptionalAction} if kind is None else {"type": kind}
+        group.add_argument(f"--{f.name.replace('_', '-')}", **how, default=f.default, choices=f.metadata.get("choices"),
                            help=f.metadata["help"] + (f", {UNITS[unit]}" if unit else ""))
 
 
@@ -48,7 +50,12 @@ def schema_properties(cls):
     out = {}
     for f in fields(cls):
         unit, text = f.metadata.get("unit"), f.metadata["help"]
-        out[f.name] = {"type": _TYPES[f.type][0], **{b: f.metadata[b] for b in BOUNDS if b in f.metadata},
-                       "default": f.default,
+        kind = {"enum": list(f.metadata["choices"])} if "choices" in f.metadata else {"type": _TYPES[_type(f)][0]}
+        out[f.name] = {**kind, **{b: f.metadata[b] for b in BOUNDS if b in f.metadata}, "default": f.default,
                        "description": text[0].upper() + text[1:] + (f", {UNITS[unit]}" if unit else "") + "."}
     return out
+
+
+def _type(f):
+    """A dataclass field's type (a class, also where the annotation is a string)."""
+    return {"float": float, "int": int, "bool": bool, "str": str}.get(f.type, f.type)
