@@ -55,6 +55,40 @@ def test_no_module_imports_a_method_from_the_kernel_or_the_stages():
         assert not any(t.split(".")[0] in ("stages", "benchmarks", "conftest") for t in targets), name
 
 
+ALLOWED = {
+    "mesh": set(), "io": {"mesh"},
+    "spacetime": {"mesh", "io"}, "verify": {"mesh"}, "medial": {"mesh", "io"}, "volumetric": {"mesh"},
+    "contact": {"mesh"}, "downstream": {"mesh", "workflow"},
+    "report": {"mesh", "verify", "downstream"},
+    "pose_repair": {"mesh", "io", "spacetime", "verify", "report", "workflow"},
+    "workflow": {"mesh", "io", "spacetime", "verify", "medial", "report", "pose_repair"},
+}
+"""Each part of posefix (a package, or the module pose_repair) -> the parts it may import: the diagram of
+docs/architecture.md ("Packages"). downstream's workflow import is ``posefix.workflow.processes`` (workers that die
+with their parent)."""
+
+
+def _part(module):
+    return module.split(".")[1] if module.count(".") else module
+
+
+def test_each_package_imports_only_what_the_architecture_diagram_allows():
+    imported = {}
+    for name, targets in import_graph().items():
+        if name != "posefix":
+            imported.setdefault(_part(name), set()).update(
+                _part(t) for t in targets if t.startswith("posefix.") and _part(t) != _part(name))
+    assert set(imported) == set(ALLOWED)
+    assert {part: sorted(imported[part] - ALLOWED[part]) for part in imported if imported[part] - ALLOWED[part]} == {}
+
+
+def test_the_architecture_page_draws_the_allowed_imports():
+    page = (ROOT / "docs" / "architecture.md").read_text()
+    for part, allowed in ALLOWED.items():
+        row = f"| `{part}` | {', '.join(f'`{a}`' for a in sorted(allowed)) or 'nothing of posefix'} |"
+        assert row in page, row
+
+
 def test_the_import_graph_has_no_cycles():
     graph = import_graph()
     graph = {m: {t for t in targets if t in graph} for m, targets in graph.items()}
