@@ -15,11 +15,13 @@ from posefix.mesh.contacts import contact_vertices
 from posefix.mesh.geometry import bbox_diagonal
 from posefix.mesh.intersections import intersecting_faces, new_pairs, self_intersecting_pairs
 from posefix.io.artifacts import read_artifact, write_artifact
-from posefix.workflow.cli import int_list, library_defaults, run_stage, stage_parser
+from posefix.workflow.cli import int_list, run_stage, stage_parser
+from posefix.workflow.settings import add_settings_options
 from posefix.io.errors import InputError
 from posefix.io.library import read_vertex_ids
 from posefix.workflow.timings import Timings
 from posefix.spacetime.classification import constraint_mask
+from posefix.spacetime.settings import ClassifySettings
 
 DOCS = {
     "pairs": ("index", "intersecting face pairs (f < g) of all key frames, concatenated, (P, 2) int64"),
@@ -37,12 +39,7 @@ def build_parser():
     parser = stage_parser("classify", __doc__)
     parser.add_argument("--keyframes", required=True, help="keyframes.h5 of the pose")
     parser.add_argument("--out", required=True, help="classify.h5 to write")
-    parser.add_argument("--ring", type=int, default=library_defaults(constraint_mask)["ring"],
-                        help="rings removed around intersecting vertices")
-    parser.add_argument("--contact", type=float, default=0.02,
-                        help="near-contact distance relative to the bbox diagonal (0 = off)")
-    parser.add_argument("--contact-radius", type=float, default=0.1,
-                        help="geodesic neighbourhood radius relative to the bbox diagonal")
+    add_settings_options(parser, ClassifySettings, "classification (config classify)")
     parser.add_argument("--exclude", type=int_list, default=[], help="vertex ids to exclude by hand, e.g. 1,2,3")
     parser.add_argument("--exclude-file", default=None, help="text file of vertex ids to exclude by hand")
     return parser

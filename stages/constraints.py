@@ -10,10 +10,12 @@ import posefix.workflow.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; r
 
 from posefix.mesh.geometry import bbox_diagonal
 from posefix.io.artifacts import read_artifact, write_artifact
-from posefix.workflow.cli import library_defaults, run_stage, stage_parser
+from posefix.workflow.cli import run_stage, stage_parser
+from posefix.workflow.settings import add_settings_options
 from posefix.io.errors import InputError
 from posefix.workflow.timings import Timings
 from posefix.spacetime.constraints import spacetime_constraints
+from posefix.spacetime.settings import ConstraintsSettings
 
 DOCS = {
     "points": ("length", "space-time constraint points (c(t_i), tau t_i), (N, 4) float64"),
@@ -28,13 +30,7 @@ def build_parser():
     parser.add_argument("--keyframes", required=True, help="keyframes.h5 of the pose")
     parser.add_argument("--classify", required=True, help="classify.h5 of the pose (V_C)")
     parser.add_argument("--out", required=True, help="constraints.h5 to write")
-    defaults = library_defaults(spacetime_constraints)
-    parser.add_argument("--samples", type=int, default=defaults["samples"],
-                        help="s: constraints at t_i = i/s, i = 0..s")
-    parser.add_argument("--tau", type=float, default=0.3,
-                        help="time-axis scale relative to the reference's bbox diagonal")
-    parser.add_argument("--tangents", choices=("hermite", "spline"), default=defaults["tangents"],
-                        help="knot tangents: finite differences (the paper's) or per-vertex cubic spline")
+    add_settings_options(parser, ConstraintsSettings, "constraints (config constraints)")
     return parser
 
 

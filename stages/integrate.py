@@ -10,11 +10,12 @@ import posefix.workflow.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; r
 import numpy as np
 
 from posefix.io.artifacts import read_artifact, write_artifact
-from posefix.workflow.cli import library_defaults, run_stage, stage_parser
+from posefix.workflow.cli import run_stage, stage_parser
+from posefix.workflow.settings import add_settings_options
 from posefix.io.errors import InputError
 from posefix.workflow.resources import opencl_device
 from posefix.workflow.timings import Timings
-from posefix.spacetime.integration import rk45
+from posefix.spacetime.settings import IntegrateSettings
 from posefix.spacetime.integration_opencl import path_lines
 from posefix.spacetime.rbf import RBFField
 
@@ -32,15 +33,7 @@ def build_parser():
     parser.add_argument("--fit", required=True, help="fit.h5 of the pose (the field, tau, sample count)")
     parser.add_argument("--keyframes", required=True, help="keyframes.h5 of the pose (reference positions)")
     parser.add_argument("--out", required=True, help="integrate.h5 to write")
-    parser.add_argument("--device", choices=("auto", "cpu", "gpu", "numpy"), default="auto",
-                        help="OpenCL device type (cpu, gpu: that one or an error; auto: a GPU, else a CPU, else "
-                             "numpy with a warning), or the numpy backend")
-    defaults = library_defaults(rk45)
-    parser.add_argument("--rtol", type=float, default=defaults["rtol"], help="relative tolerance per step")
-    parser.add_argument("--atol-rel", type=float, default=1e-7,
-                        help="absolute tolerance per step relative to the bbox diagonal (1e-3 eps)")
-    parser.add_argument("--h0", type=float, default=defaults["h0"], help="first step size (time units)")
-    parser.add_argument("--vec", type=int, default=0, help="OpenCL vector width over centres (0: from the device)")
+    add_settings_options(parser, IntegrateSettings, "integration (config integrate)")
     return parser
 
 

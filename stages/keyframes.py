@@ -5,7 +5,6 @@ unwrapping; see ``posefix.spacetime.keyframes`` for the method. Writes ``keyfram
 t = k/(K-1), the two input poses, and per-face rotation diagnostics.
 """
 
-import argparse
 from pathlib import Path
 
 import posefix.workflow.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; runtime defaults before numpy)
@@ -13,10 +12,12 @@ import numpy as np
 
 from posefix.mesh.geometry import bbox_diagonal
 from posefix.io.artifacts import write_artifact
-from posefix.workflow.cli import library_defaults, run_stage, stage_parser
+from posefix.workflow.cli import run_stage, stage_parser
+from posefix.workflow.settings import add_settings_options
 from posefix.io.library import read_welded_pair
 from posefix.workflow.timings import Timings
 from posefix.spacetime import keyframes as kf
+from posefix.spacetime.settings import KeyframesSettings
 
 DOCS = {
     "t": ("1", "key-frame times in [0, 1], (K,) float64"),
@@ -32,25 +33,12 @@ DOCS = {
 }
 
 
-def count_arg(text):
-    value = int(text)
-    if value < 2:
-        raise argparse.ArgumentTypeError("at least 2 key frames are needed")
-    return value
-
-
 def build_parser():
     parser = stage_parser("keyframes", __doc__)
     parser.add_argument("--reference", required=True, help="reference mesh file")
     parser.add_argument("--target", required=True, help="target pose mesh file")
     parser.add_argument("--out", required=True, help="keyframes.h5 to write")
-    parser.add_argument("--count", type=count_arg, default=library_defaults(kf.keyframes)["count"],
-                        help="number of key frames K")
-    parser.add_argument("--align", action=argparse.BooleanOptionalAction, default=library_defaults(kf.prepare)["align"],
-                        help="remove the global rigid motion first")
-    parser.add_argument("--unwrap", action=argparse.BooleanOptionalAction,
-                        default=library_defaults(kf.prepare)["unwrap"],
-                        help="unwrap rotation branches over the face adjacency (else principal branches)")
+    add_settings_options(parser, KeyframesSettings, "key frames (config keyframes)")
     return parser
 
 

@@ -10,11 +10,15 @@ import sys
 import yaml
 
 from posefix.mesh.contact_solver import ContactSettings
+from posefix.spacetime.settings import (ClassifySettings, ConstraintsSettings, IntegrateSettings,
+                                        KeyframesSettings)
 from posefix.verify.contact_finish import FinishSettings
 from posefix.verify.sequence import RepairSettings
 from posefix.workflow.settings import schema_properties
 
-DECLARED = {"contact": (ContactSettings,), "verify": (RepairSettings, FinishSettings)}
+DECLARED = {"keyframes": (KeyframesSettings,), "classify": (ClassifySettings,), "constraints": (ConstraintsSettings,),
+            "integrate": (IntegrateSettings,), "verify": (RepairSettings, FinishSettings),
+            "contact": (ContactSettings,)}
 """Config section -> the dataclasses that declare its settings (the section may hold other keys: a rule's threads, nested
 sections)."""
 
@@ -29,7 +33,7 @@ def declared_schema(text):
                    len(lines))
         for name, prop in [item for cls in classes for item in schema_properties(cls).items()]:
             k = next(k for k in range(start, end) if lines[k].startswith(f"      {name}: "))
-            flow = yaml.safe_dump(prop, default_flow_style=True, sort_keys=False, width=10 ** 6).strip()
+            flow = yaml.safe_dump(prop, default_flow_style=True, sort_keys=False, width=10 ** 6, allow_unicode=True).strip()
             lines[k] = f"      {name}: {flow}\n"
     return "".join(lines)
 

@@ -3,7 +3,9 @@ a stage its command-line options, the config schema its section, and so docs/con
 library's default is the field's (issue 51: one place per setting).
 
 A field's metadata: ``help`` (str, lower case, no full stop), optionally ``unit`` (a key of :data:`UNITS`),
-JSON-schema bounds (:data:`BOUNDS`) and, for a str, its ``choices``. A bool is a ``--name``/``--no-name`` pair.
+JSON-schema bounds (:data:`BOUNDS`), for a str its ``choices``, and ``cite``: where a paper gives the value (``11
+in S0 §4.1``), which the schema's description says and the option's help does not. A bool is a ``--name``/``--no-name``
+pair.
 
 Examples
 --------
@@ -33,9 +35,32 @@ def add_settings_options(parser, cls, title):
     group = parser.add_argument_group(title)
     for f in fields(cls):
         unit, kind = f.metadata.get("unit"), _TYPES[_type(f)][1]
-        how = {"action": argparse.BooleanOptionalAction} if kind is None else {"type": kind}
+        how = {"action": argparse.BooleanOptionalAction} if kind is None else {"type": _bounded(kind, f.metadata)}
         group.add_argument(f"--{f.name.replace('_', '-')}", **how, default=f.default, choices=f.metadata.get("choices"),
                            help=f.metadata["help"] + (f", {UNITS[unit]}" if unit else ""))
+
+
+def _bounded(kind, metadata):
+    """``kind`` (float, int, str) as an argparse type that also refuses a value outside the field's bounds."""
+    checks = [(bound, value, test) for bound, test in (("minimum", lambda v, b: v >= b),
+                                                       ("exclusiveMinimum", lambda v, b: v > b),
+                                                       ("maximum", lambda v, b: v <= b),
+                                                       ("exclusiveMaximum", lambda v, b: v < b))
+              for value in [metadata.get(bound)] if value is not None]
+    if not checks:
+        return kind
+
+    def parse(text):
+        value = kind(text)
+        for bound, limit, test in checks:
+            if not test(value, limit):
+                words = {"minimum": "at least", "exclusiveMinimum": "more than", "maximum": "at most",
+                         "exclusiveMaximum": "less than"}[bound]
+                raise argparse.ArgumentTypeError(f"{text}: must be {words} {limit}")
+        return value
+
+    parse.__name__ = kind.__name__  # (argparse names the type in its message)
+    return parse
 
 
 def settings_from(options, cls):
@@ -52,8 +77,14 @@ def schema_properties(cls):
         unit, text = f.metadata.get("unit"), f.metadata["help"]
         kind = {"enum": list(f.metadata["choices"])} if "choices" in f.metadata else {"type": _TYPES[_type(f)][0]}
         out[f.name] = {**kind, **{b: f.metadata[b] for b in BOUNDS if b in f.metadata}, "default": f.default,
-                       "description": text[0].upper() + text[1:] + (f", {UNITS[unit]}" if unit else "") + "."}
+                       "description": _sentence(text) + (f", {UNITS[unit]}" if unit else "")
+                       + (f" ({f.metadata['cite']})" if "cite" in f.metadata else "") + "."}
     return out
+
+
+def _sentence(text):
+    """``text`` as the start of a sentence: capitalized, unless it starts with a symbol (``s: constraints ...``)."""
+    return text if text[1:2] == ":" else text[0].upper() + text[1:]
 
 
 def _type(f):
