@@ -21,7 +21,7 @@ from posefix.io.errors import InputError
 from posefix.io.library import read_vertex_ids
 from posefix.workflow.timings import Timings
 from posefix.spacetime.classification import constraint_mask
-from posefix.spacetime.settings import ClassifySettings
+from posefix.workflow.stage_settings import ClassifySettings
 
 DOCS = {
     "pairs": ("index", "intersecting face pairs (f < g) of all key frames, concatenated, (P, 2) int64"),

@@ -15,7 +15,7 @@ from posefix.workflow.settings import add_settings_options
 from posefix.io.errors import InputError
 from posefix.workflow.timings import Timings
 from posefix.spacetime.constraints import spacetime_constraints
-from posefix.spacetime.settings import ConstraintsSettings
+from posefix.workflow.stage_settings import ConstraintsSettings
 
 DOCS = {
     "points": ("length", "space-time constraint points (c(t_i), tau t_i), (N, 4) float64"),

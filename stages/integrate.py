@@ -15,7 +15,7 @@ from posefix.workflow.settings import add_settings_options
 from posefix.io.errors import InputError
 from posefix.workflow.resources import opencl_device
 from posefix.workflow.timings import Timings
-from posefix.spacetime.settings import IntegrateSettings
+from posefix.workflow.stage_settings import IntegrateSettings
 from posefix.spacetime.integration_opencl import path_lines
 from posefix.spacetime.rbf import RBFField
 

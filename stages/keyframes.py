@@ -17,7 +17,7 @@ from posefix.workflow.settings import add_settings_options
 from posefix.io.library import read_welded_pair
 from posefix.workflow.timings import Timings
 from posefix.spacetime import keyframes as kf
-from posefix.spacetime.settings import KeyframesSettings
+from posefix.workflow.stage_settings import KeyframesSettings
 
 DOCS = {
     "t": ("1", "key-frame times in [0, 1], (K,) float64"),

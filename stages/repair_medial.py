@@ -9,11 +9,13 @@ import posefix.workflow.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; r
 
 from posefix.mesh.geometry import bbox_diagonal
 from posefix.io.artifacts import read_artifact, write_artifact
-from posefix.workflow.cli import library_defaults, run_stage, stage_parser
+from posefix.workflow.cli import run_stage, stage_parser
+from posefix.workflow.settings import add_settings_options
 from posefix.io.errors import InputError
 from posefix.io.library import read_welded_pair
 from posefix.workflow.timings import Timings
 from posefix.medial.repair import MedialRepair
+from posefix.workflow.stage_settings import MedialRepairSettings
 
 DOCS = {
     "start": ("length", "the target pose, (n, 3) float64"),
@@ -28,19 +30,11 @@ DOCS = {
 
 def build_parser():
     parser = stage_parser("repair_medial", __doc__)
-    defaults = library_defaults(MedialRepair)
     parser.add_argument("--reference", required=True, help="reference mesh file")
     parser.add_argument("--target", required=True, help="target pose file")
     parser.add_argument("--skeleton", required=True, help="skeleton.h5 of the reference")
     parser.add_argument("--out", required=True, help="medial.h5 to write")
-    parser.add_argument("--margin", type=float, default=0.01,
-                        help="clearance kept between parts apart at rest, relative to the bbox diagonal")
-    parser.add_argument("--tau", type=float, default=defaults["tau"], help="step size of the medial-ball flow")
-    parser.add_argument("--neighbours", type=int, default=defaults["neighbours"], help="candidate balls per vertex")
-    parser.add_argument("--max-reach", type=int, default=defaults["max_reach"],
-                        help="largest damaged region tried, in ball radii around the new intersections")
-    parser.add_argument("--max-iters", type=int, default=library_defaults(MedialRepair.repair)["max_iters"],
-                        help="flow iterations at most")
+    add_settings_options(parser, MedialRepairSettings, "medial repair (config medial.repair)")
     return parser
 
 

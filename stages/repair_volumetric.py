@@ -10,11 +10,13 @@ too do not count). See ``posefix.volumetric.repair``.
 import posefix.workflow.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; runtime defaults before numpy)
 
 from posefix.io.artifacts import read_artifact, write_artifact
-from posefix.workflow.cli import library_defaults, run_stage, stage_parser
+from posefix.workflow.cli import run_stage, stage_parser
+from posefix.workflow.settings import add_settings_options
 from posefix.io.errors import InputError
 from posefix.io.library import read_welded_pair
 from posefix.workflow.timings import Timings
 from posefix.volumetric.repair import VolumetricRepair
+from posefix.workflow.stage_settings import VolumetricRepairSettings
 
 DOCS = {
     "start": ("length", "the target pose, (n, 3) float64"),
@@ -27,20 +29,12 @@ DOCS = {
 
 def build_parser():
     parser = stage_parser("repair_volumetric", __doc__)
-    defaults = library_defaults(VolumetricRepair.repair)
     parser.add_argument("--reference", required=True, help="reference mesh file")
     parser.add_argument("--target", required=True, help="target pose file")
     parser.add_argument("--classify", required=True, help="classify.h5 of the pose (its mask is V_C)")
     parser.add_argument("--tets", required=True, help="tets.h5 of the reference (stage tet_mesh)")
     parser.add_argument("--out", required=True, help="volumetric.h5 to write")
-    parser.add_argument("--iterations", type=int, default=defaults["iterations"],
-                        help="volumetric editor iterations (linear solve, rotations, update)")
-    parser.add_argument("--point-weight", type=float, default=defaults["point_weight"],
-                        help="weight of the V_C point handles, relative to the mean diagonal of the tet Laplacian")
-    parser.add_argument("--max-rings", type=int, default=defaults["max_rings"],
-                        help="most rings of neighbours the free region grows by (tried: 0, 1, 2, 4, ...)")
-    parser.add_argument("--max-free", type=float, default=defaults["max_free"],
-                        help="largest free region tried, as a fraction of the vertices")
+    add_settings_options(parser, VolumetricRepairSettings, "volumetric repair (config volumetric.repair)")
     return parser
 
 

@@ -8,11 +8,13 @@ target pose.
 import posefix.workflow.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; runtime defaults before numpy)
 
 from posefix.io.artifacts import write_artifact
-from posefix.workflow.cli import library_defaults, run_stage, stage_parser
+from posefix.workflow.cli import run_stage, stage_parser
+from posefix.workflow.settings import add_settings_options
 from posefix.io.errors import InputError
 from posefix.io.library import read_welded_reference
 from posefix.workflow.timings import Timings
 from posefix.volumetric.tet_mesh import tet_mesh
+from posefix.workflow.stage_settings import TetMeshSettings
 
 DOCS = {
     "X": ("length", "tet-mesh vertices at rest, (k, 3) float64"),
@@ -24,8 +26,7 @@ def build_parser():
     parser = stage_parser("tet_mesh", __doc__)
     parser.add_argument("--reference", required=True, help="reference mesh (.obj/.ply/.off, optionally .gz)")
     parser.add_argument("--out", required=True, help="tets.h5 to write")
-    parser.add_argument("--tet-vertices", type=int, default=library_defaults(tet_mesh)["surface_vertices"],
-                        help="surface vertices of the decimated mesh the tets are built from")
+    add_settings_options(parser, TetMeshSettings, "tet mesh (config volumetric.repair)")
     return parser
 
 

@@ -61,7 +61,7 @@ ALLOWED = {
     "contact": {"mesh"}, "downstream": {"mesh", "workflow"},
     "report": {"mesh", "verify", "downstream"},
     "pose_repair": {"mesh", "io", "spacetime", "verify", "report", "workflow"},
-    "workflow": {"mesh", "io", "spacetime", "verify", "medial", "report", "pose_repair"},
+    "workflow": {"mesh", "io", "spacetime", "verify", "medial", "volumetric", "report", "pose_repair"},
 }
 """Each part of posefix (a package, or the module pose_repair) -> the parts it may import: the diagram of
 docs/architecture.md ("Packages"). downstream's workflow import is ``posefix.workflow.processes`` (workers that die
@@ -118,6 +118,13 @@ def test_functions_are_short_with_few_parameters():
                 where = f"{path.relative_to(LIB)}:{node.lineno} {node.name}"
                 assert node.end_lineno - node.lineno + 1 <= 50, f"{where}: {node.end_lineno - node.lineno + 1} lines"
                 assert count <= 8, f"{where}: {count} parameters"
+
+
+def test_test_files_have_unique_names():
+    """pytest imports test modules by their file name (no package __init__): two test_repair.py cannot be collected
+    together."""
+    names = [p.name for p in (ROOT / "tests").rglob("test_*.py")]
+    assert sorted(n for n in set(names) if names.count(n) > 1) == []
 
 
 def test_stages_do_not_manipulate_sys_path():

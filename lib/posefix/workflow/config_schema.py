@@ -10,15 +10,17 @@ import sys
 import yaml
 
 from posefix.mesh.contact_solver import ContactSettings
-from posefix.spacetime.settings import (ClassifySettings, ConstraintsSettings, IntegrateSettings,
-                                        KeyframesSettings)
+from posefix.workflow.stage_settings import (ClassifySettings, ConstraintsSettings, IntegrateSettings,
+                                             KeyframesSettings, MedialRepairSettings, SkeletonSettings,
+                                             TetMeshSettings, VolumetricRepairSettings)
 from posefix.verify.contact_finish import FinishSettings
 from posefix.verify.sequence import RepairSettings
 from posefix.workflow.settings import schema_properties
 
 DECLARED = {"keyframes": (KeyframesSettings,), "classify": (ClassifySettings,), "constraints": (ConstraintsSettings,),
             "integrate": (IntegrateSettings,), "verify": (RepairSettings, FinishSettings),
-            "contact": (ContactSettings,)}
+            "contact": (ContactSettings,), "medial.skeleton": (SkeletonSettings,),
+            "medial.repair": (MedialRepairSettings,), "volumetric.repair": (TetMeshSettings, VolumetricRepairSettings)}
 """Config section -> the dataclasses that declare its settings (the section may hold other keys: a rule's threads, nested
 sections)."""
 
@@ -28,14 +30,24 @@ def declared_schema(text):
     them, str; every other line unchanged."""
     lines = text.splitlines(keepends=True)
     for section, classes in DECLARED.items():
-        start = lines.index(f"  {section}:\n")
-        end = next((k for k in range(start + 1, len(lines)) if lines[k].startswith("  ") and lines[k][2] != " "),
-                   len(lines))
+        start, end, indent = _section(lines, section)
         for name, prop in [item for cls in classes for item in schema_properties(cls).items()]:
-            k = next(k for k in range(start, end) if lines[k].startswith(f"      {name}: "))
-            flow = yaml.safe_dump(prop, default_flow_style=True, sort_keys=False, width=10 ** 6, allow_unicode=True).strip()
-            lines[k] = f"      {name}: {flow}\n"
+            k = next(k for k in range(start, end) if lines[k].startswith(f"{indent}{name}: "))
+            flow = yaml.safe_dump(prop, default_flow_style=True, sort_keys=False, width=10 ** 6, allow_unicode=True)
+            lines[k] = f"{indent}{name}: {flow.strip()}\n"
     return "".join(lines)
+
+
+def _section(lines, path):
+    """``(first line, end line, indent of its properties)`` of the config section ``path`` (dotted: ``medial.repair``)
+    in the schema's ``lines``: a section at depth k is at indent 2 + 4 k, its properties 4 deeper."""
+    start, end = 0, len(lines)
+    for depth, name in enumerate(path.split(".")):
+        indent = " " * (2 + 4 * depth)
+        start = next(k for k in range(start, end) if lines[k] == f"{indent}{name}:\n")
+        end = next((k for k in range(start + 1, end) if lines[k].strip() and len(lines[k]) - len(lines[k].lstrip())
+                    <= len(indent)), end)
+    return start, end, " " * (6 + 4 * depth)
 
 
 if __name__ == "__main__":

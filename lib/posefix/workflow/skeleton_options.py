@@ -2,21 +2,15 @@
 
 import numpy as np
 
-from posefix.workflow.cli import library_defaults
 from posefix.io.errors import InputError
 from posefix.medial.skeletal_mesh import skeletal_mesh
+from posefix.workflow.settings import add_settings_options
+from posefix.workflow.stage_settings import SkeletonSettings
 
 
 def add_skeleton_options(parser):
-    """``--medial``, ``--tol``, ``--smooth-iters``, ``--smooth-step`` with :func:`skeletal_mesh`'s defaults."""
-    defaults = library_defaults(skeletal_mesh)
-    parser.add_argument("--medial", choices=("poles", "shrinking_ball", "auto"), default=defaults["medial"],
-                        help="medial-ball centres: inner Voronoi poles (the paper's), shrinking balls, or poles, bad ones replaced")
-    parser.add_argument("--tol", type=float, default=defaults["tol"],
-                        help="a ball crossing the surface by more than tol x its radius counts as bad")
-    parser.add_argument("--smooth-iters", type=int, default=defaults["smooth_iters"],
-                        help="iterations of the gated bi-Laplacian flow on the skeletal mesh")
-    parser.add_argument("--smooth-step", type=float, default=defaults["smooth_step"], help="step of that flow")
+    """``--medial``, ``--tol``, ``--smooth-iters``, ``--smooth-step``: :class:`SkeletonSettings`' options."""
+    add_settings_options(parser, SkeletonSettings, "skeletal mesh (config medial.skeleton)")
 
 
 def reference_skeleton(path, V, F, args):
