@@ -9,7 +9,6 @@ rule on the same constraints continues from it too). See ``posefix.spacetime.fit
 ``posefix.spacetime.factorization``.
 """
 
-import argparse
 import json
 from contextlib import contextmanager
 from pathlib import Path
@@ -19,7 +18,9 @@ import numpy as np
 
 from posefix.spacetime import fit_checkpoint as checkpoint
 from posefix.io.artifacts import config_hash, read_artifact, source_file, write_artifact
-from posefix.workflow.cli import library_defaults, run_stage, stage_parser
+from posefix.workflow.cli import run_stage, stage_parser
+from posefix.workflow.settings import add_settings_options
+from posefix.workflow.stage_settings import FitOptions
 from posefix.io.errors import InputError
 from posefix.io.files import file_sha256
 from posefix.workflow.resources import cache_budget, opencl_device
@@ -54,27 +55,8 @@ def build_parser():
     parser.add_argument("--constraints", required=True, help="constraints.h5 of the pose")
     parser.add_argument("--out", required=True, help="fit.h5 to write")
     parser.add_argument("--checkpoint", default=None, help="checkpoint folder (default: <out> with .checkpoint)")
-    parser.add_argument("--keep-checkpoint", action=argparse.BooleanOptionalAction, default=False,
-                        help="keep the checkpoint once the fit is written: a rerun with another --eps-rel or "
-                        "--max-centers continues from it (else it starts over; 64 MB per lion pose)")
-    defaults = library_defaults(FitSettings)
-    parser.add_argument("--eps-rel", type=float, default=1e-4, help="stop at max error < eps_rel * bbox diagonal")
-    parser.add_argument("--eps-rms-rel", type=float, default=0.0,
-                        help="stop at rms error < this * diagonal (0: off)")
-    parser.add_argument("--max-centers", type=int, default=defaults["max_centers"], help="stop at this many centres")
-    parser.add_argument("--candidates", type=int, default=defaults["candidates"],
-                        help="p: worst constraints considered per iteration")
-    parser.add_argument("--batch", type=int, default=defaults["batch"], help="m: centres added per iteration")
-    parser.add_argument("--selection", choices=("fps", "worst"), default=defaults["selection"],
-                        help="fps: farthest points within the candidates (the paper's); worst: the m worst (Carr et al.)")
-    parser.add_argument("--update", choices=("blocked", "full"), default=defaults["update"],
-                        help="blocked Cholesky updates or full LU refactorization every iteration")
-    parser.add_argument("--memory-gb", type=float, default=defaults["memory_bytes"] / 1e9,
-                        help="budget of the kernel cache (GB); lowered to what --mem-mb and the machine allow")
+    add_settings_options(parser, FitOptions, "fit (config fit)")
     parser.add_argument("--mem-mb", type=float, default=None, help="the job's memory (MB; the rule's resources)")
-    parser.add_argument("--device", choices=("auto", "cpu", "gpu", "numpy"), default="auto",
-                        help="where the residual is recomputed when the kernel cache does not fit: an OpenCL device "
-                             "(cpu, gpu: that one or an error; auto: a GPU, else a CPU, else numpy) or numpy")
     return parser
 
 

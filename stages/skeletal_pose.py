@@ -18,7 +18,9 @@ import numpy as np
 from posefix.mesh.geometry import bbox_diagonal
 from posefix.mesh.intersections import intersecting_faces, self_intersecting_pairs
 from posefix.io.artifacts import write_artifact
-from posefix.workflow.cli import library_defaults, run_stage, stage_parser
+from posefix.workflow.cli import run_stage, stage_parser
+from posefix.workflow.settings import add_settings_options
+from posefix.workflow.stage_settings import SkeletalPoseSettings
 from posefix.io.library import read_reference
 from posefix.io.meshes import mesh_file, write_like
 from posefix.medial.rig_files import read_rig
@@ -39,25 +41,13 @@ DOCS = {
 
 def build_parser():
     parser = stage_parser("skeletal_pose", __doc__)
-    poser, flow = (library_defaults(f) for f in (SkeletalPoser, SkeletalPoser.author))
     parser.add_argument("--mesh", required=True, help="reference mesh (.obj/.ply/.off, optionally .gz)")
     parser.add_argument("--rig", required=True, help="rig file (YAML: joints and poses, see examples/demo-limb.yaml)")
     parser.add_argument("--out", required=True, help="folder of the authored pose library")
     parser.add_argument("--artifact", required=True, help="HDF5 file of the skeletal mesh and the metrics")
     parser.add_argument("--name", default=None, help="library name: files <name>-reference.*; default the rig's")
     add_skeleton_options(parser)
-    parser.add_argument("--falloff", type=float, default=poser["falloff"],
-                        help="skinning blend length / mean bone length")
-    parser.add_argument("--min-sine", type=float, default=poser["min_sine"],
-                        help="skeletal triangles with a smaller corner sine use the rig's rotation as frame")
-    parser.add_argument("--min-area", type=float, default=poser["min_area"],
-                        help="so do skeletal triangles smaller than this x their mesh triangle (collapsed skeleton)")
-    parser.add_argument("--tau", type=float, default=flow["tau"], help="step size of the medial-ball flow (Eq. 9)")
-    parser.add_argument("--margin", type=float, default=0.01,
-                        help="flow margin / bbox diagonal between parts apart at rest (0: the paper's flow, no margin)")
-    parser.add_argument("--neighbours", type=int, default=flow["neighbours"],
-                        help="candidate balls per vertex at most in the flow (0: all within R_i, as the paper)")
-    parser.add_argument("--max-iters", type=int, default=flow["max_iters"], help="flow iterations at most")
+    add_settings_options(parser, SkeletalPoseSettings, "authoring (config medial.pose)")
     return parser
 
 

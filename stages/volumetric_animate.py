@@ -18,7 +18,9 @@ import numpy as np
 from posefix.mesh.distance import surface_distance_below
 from posefix.mesh.geometry import bbox_diagonal
 from posefix.io.artifacts import write_artifact
-from posefix.workflow.cli import library_defaults, run_stage, stage_parser
+from posefix.workflow.cli import run_stage, stage_parser
+from posefix.workflow.settings import add_settings_options
+from posefix.workflow.stage_settings import TetMeshSettings, VolumetricAnimateSettings
 from posefix.io.errors import InputError
 from posefix.io.library import read_reference
 from posefix.io.marker_tracks import read_tracks
@@ -56,25 +58,14 @@ def named_box(text):
 
 def build_parser():
     parser = stage_parser("volumetric_animate", __doc__)
-    animate = library_defaults(MarkerAnimator.animate)
     parser.add_argument("--mesh", required=True, help="reference mesh (.obj/.ply/.off, optionally .gz)")
     parser.add_argument("--tracks", required=True, help="marker tracks: .csv (frame, marker, x, y, z) or .npz")
     parser.add_argument("--out", required=True, help="folder of the animated pose library")
     parser.add_argument("--artifact", required=True, help="HDF5 file of the tet mesh, markers and residuals")
     parser.add_argument("--name", default=None, help="library name: files <name>-reference.*, <name>-<frame>.*; "
                                                      "default the tracks file's")
-    parser.add_argument("--attach", choices=("position", "vertex"), default="position",
-                        help="markers at their first-frame positions, or at the reference vertices their labels "
-                             "name")
-    parser.add_argument("--max-offset", type=float, default=0.05,
-                        help="with --attach position: largest distance of a first-frame marker from the reference "
-                             "surface, relative to its bbox diagonal")
-    parser.add_argument("--tet-vertices", type=int, default=library_defaults(tet_mesh)["surface_vertices"],
-                        help="surface vertices of the decimated mesh the tets are built from")
-    parser.add_argument("--iterations", type=int, default=animate["iterations"],
-                        help="volumetric editor iterations per frame, warm-started from the previous frame")
-    parser.add_argument("--first-iterations", type=int, default=animate["first_iterations"],
-                        help="volumetric editor iterations of the first frame, from the rest pose's rotations")
+    add_settings_options(parser, TetMeshSettings, "tet mesh (config volumetric.animate)")
+    add_settings_options(parser, VolumetricAnimateSettings, "animation (config volumetric.animate)")
     parser.add_argument("--rigid", type=named_box, action="append", default=[], metavar="NAME=x0,y0,z0,x1,y1,z1",
                         help="a rigid region: the tets wholly inside the box (repeatable)")
     return parser

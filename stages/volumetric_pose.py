@@ -15,7 +15,9 @@ import posefix.workflow.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; r
 import numpy as np
 
 from posefix.io.artifacts import write_artifact
-from posefix.workflow.cli import library_defaults, run_stage, stage_parser
+from posefix.workflow.cli import run_stage, stage_parser
+from posefix.workflow.settings import add_settings_options
+from posefix.workflow.stage_settings import TetMeshSettings, VolumetricPoseSettings
 from posefix.io.errors import InputError
 from posefix.io.library import read_reference
 from posefix.io.meshes import mesh_file, write_like
@@ -36,18 +38,13 @@ DOCS = {
 
 def build_parser():
     parser = stage_parser("volumetric_pose", __doc__)
-    poser = library_defaults(VolumetricPoser.pose)
     parser.add_argument("--mesh", required=True, help="reference mesh (.obj/.ply/.off, optionally .gz)")
     parser.add_argument("--script", required=True, help="pose script (YAML: handles, rigid, poses)")
     parser.add_argument("--out", required=True, help="folder of the authored pose library")
     parser.add_argument("--artifact", required=True, help="HDF5 file of the tet mesh and the metrics")
     parser.add_argument("--name", default=None, help="library name: files <name>-reference.*; default the script's")
-    parser.add_argument("--tet-vertices", type=int, default=library_defaults(tet_mesh)["surface_vertices"],
-                        help="surface vertices of the decimated mesh the tets are built from")
-    parser.add_argument("--iterations", type=int, default=poser["iterations"],
-                        help="volumetric editor iterations per frame (linear solve, rotations, update)")
-    parser.add_argument("--frames", type=int, default=poser["frames"],
-                        help="frames a pose is reached in, each warm-started from the last")
+    add_settings_options(parser, TetMeshSettings, "tet mesh (config volumetric.pose)")
+    add_settings_options(parser, VolumetricPoseSettings, "authoring (config volumetric.pose)")
     return parser
 
 

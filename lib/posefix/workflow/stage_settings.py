@@ -1,5 +1,5 @@
 """The stages' settings, declared once where no library settings class holds them (config sections ``keyframes``,
-``classify``, ``constraints``, ``integrate``, ``medial.skeleton``, ``medial.repair``, ``volumetric.repair``): each
+``classify``, ``constraints``, ``fit``, ``integrate``, ``medial.*``, ``volumetric.*``): each
 field's default (the library function's, where the stage passes the value on unchanged), help, unit and bounds, from
 which :mod:`posefix.workflow.settings` makes the stages' options and :mod:`posefix.workflow.config_schema` the
 schema's sections. Lengths of unit ``d`` are relative to the reference's bounding-box diagonal; the stage scales them.
@@ -9,12 +9,16 @@ schema's sections. Lengths of unit ``d`` are relative to the reference's boundin
 
 from dataclasses import dataclass, field
 
+from posefix.medial.authoring import SkeletalPoser
 from posefix.medial.repair import MedialRepair
 from posefix.medial.skeletal_mesh import skeletal_mesh
 from posefix.spacetime.classification import constraint_mask
 from posefix.spacetime.constraints import spacetime_constraints
+from posefix.spacetime.fit import FitSettings
 from posefix.spacetime.integration import rk45
 from posefix.spacetime.keyframes import keyframes, prepare
+from posefix.volumetric.authoring import VolumetricPoser
+from posefix.volumetric.markers import MarkerAnimator
 from posefix.volumetric.repair import VolumetricRepair
 from posefix.volumetric.tet_mesh import tet_mesh
 from posefix.workflow.cli import library_defaults
@@ -54,6 +58,39 @@ class ConstraintsSettings:
     tangents: str = field(default=library_defaults(spacetime_constraints)["tangents"], metadata={
         "help": "knot tangents: hermite (finite differences, the paper's) or spline (a per-vertex cubic spline)",
         "choices": ("hermite", "spline"), "cite": "S0 §4.1"})
+
+
+@dataclass(frozen=True)
+class FitOptions:
+    """Stage fit: the greedy RBF fit of the space-time vector field (S0 §4.2); relative lengths where the library's
+    :class:`~posefix.spacetime.fit.FitSettings` takes lengths, and its memory in GB."""
+
+    eps_rel: float = field(default=1e-4, metadata={
+        "help": "stop at max error < eps_rel * bbox diagonal", "minimum": 0, "cite": "1e-4 in S0 §4.2"})
+    eps_rms_rel: float = field(default=0.0, metadata={
+        "help": "stop at rms error < this * bbox diagonal (0: off)", "minimum": 0})
+    max_centers: int = field(default=FitSettings.max_centers, metadata={
+        "help": "stop at this many centres", "minimum": 16})
+    candidates: int = field(default=FitSettings.candidates, metadata={
+        "help": "p: worst constraints considered per iteration", "minimum": 1, "cite": "1024 in S0 §4.2"})
+    batch: int = field(default=FitSettings.batch, metadata={
+        "help": "m: centres added per iteration", "minimum": 1, "cite": "128 in S0 §4.2"})
+    selection: str = field(default=FitSettings.selection, metadata={
+        "help": "centre selection: fps (farthest points within the candidates, the paper's) or worst (the m worst, "
+                "Carr et al.)",
+        "choices": ("fps", "worst"), "cite": "S0 §4.2"})
+    update: str = field(default=FitSettings.update, metadata={
+        "help": "blocked Cholesky updates or full LU refactorization every iteration", "choices": ("blocked", "full")})
+    memory_gb: float = field(default=FitSettings.memory_bytes / 1e9, metadata={
+        "help": "budget of the kernel cache (GB); lowered to what --mem-mb and the machine allow",
+        "exclusiveMinimum": 0})
+    device: str = field(default="auto", metadata={
+        "help": "where the residual is recomputed when the kernel cache does not fit: an OpenCL device (cpu, gpu: "
+                "that one or an error; auto: a GPU, else a CPU, else numpy) or numpy",
+        "choices": ("auto", "cpu", "gpu", "numpy")})
+    keep_checkpoint: bool = field(default=False, metadata={
+        "help": "keep the checkpoint once the fit is written: a rerun with another --eps-rel or --max-centers "
+                "continues from it (else it starts over; 64 MB per lion pose)"})
 
 
 @dataclass(frozen=True)
@@ -130,3 +167,54 @@ class VolumetricRepairSettings:
         "help": "most rings of neighbours the free region grows by (tried: 0, 1, 2, 4, ...)", "minimum": 0})
     max_free: float = field(default=library_defaults(VolumetricRepair.repair)["max_free"], metadata={
         "help": "largest free region tried, as a fraction of the vertices", "exclusiveMinimum": 0, "maximum": 1})
+
+
+@dataclass(frozen=True)
+class SkeletalPoseSettings:
+    """Stage skeletal_pose: a pose library authored from a rig (S1 §2-4), besides its skeletal mesh's settings."""
+
+    falloff: float = field(default=library_defaults(SkeletalPoser)["falloff"], metadata={
+        "help": "skinning blend length / mean bone length", "exclusiveMinimum": 0})
+    min_sine: float = field(default=library_defaults(SkeletalPoser)["min_sine"], metadata={
+        "help": "skeletal triangles with a smaller corner sine use the rig's rotation as frame", "minimum": 0,
+        "maximum": 1})
+    min_area: float = field(default=library_defaults(SkeletalPoser)["min_area"], metadata={
+        "help": "so do skeletal triangles smaller than this x their mesh triangle (a collapsed skeleton)",
+        "minimum": 0})
+    tau: float = field(default=library_defaults(SkeletalPoser.author)["tau"], metadata={
+        "help": "step size of the medial-ball flow", "exclusiveMinimum": 0, "cite": "S1 Eq. 9"})
+    margin: float = field(default=0.01, metadata={
+        "help": "flow margin between parts apart at rest (0: the paper's flow, no margin)", "unit": "d",
+        "minimum": 0})
+    neighbours: int = field(default=library_defaults(SkeletalPoser.author)["neighbours"], metadata={
+        "help": "candidate balls per vertex at most in the flow (0: all within R_i, as the paper)", "minimum": 0,
+        "cite": "S1 Eq. 10"})
+    max_iters: int = field(default=library_defaults(SkeletalPoser.author)["max_iters"], metadata={
+        "help": "flow iterations at most", "minimum": 0, "cite": "10-50 needed in S1 §4"})
+
+
+@dataclass(frozen=True)
+class VolumetricPoseSettings:
+    """Stage volumetric_pose: a pose library authored from a pose script (S4 §2), besides its tet mesh's settings."""
+
+    iterations: int = field(default=library_defaults(VolumetricPoser.pose)["iterations"], metadata={
+        "help": "volumetric editor iterations per frame (linear solve, rotations, update)", "minimum": 0})
+    frames: int = field(default=library_defaults(VolumetricPoser.pose)["frames"], metadata={
+        "help": "frames a pose is reached in, each warm-started from the last", "minimum": 1})
+
+
+@dataclass(frozen=True)
+class VolumetricAnimateSettings:
+    """Stage volumetric_animate: the reference animated by marker tracks (S4 §3.2), besides its tet mesh's settings."""
+
+    attach: str = field(default="position", metadata={
+        "help": "markers at their first-frame positions, or at the reference vertices their labels name",
+        "choices": ("position", "vertex")})
+    max_offset: float = field(default=0.05, metadata={
+        "help": "with --attach position: largest distance of a first-frame marker from the reference surface",
+        "unit": "d", "minimum": 0})
+    iterations: int = field(default=library_defaults(MarkerAnimator.animate)["iterations"], metadata={
+        "help": "volumetric editor iterations per frame, warm-started from the previous frame", "minimum": 0,
+        "cite": "2-3 in S4 §3.2"})
+    first_iterations: int = field(default=library_defaults(MarkerAnimator.animate)["first_iterations"], metadata={
+        "help": "volumetric editor iterations of the first frame, from the rest pose's rotations", "minimum": 0})
