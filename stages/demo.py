@@ -11,7 +11,9 @@ import posefix.workflow.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; r
 
 from posefix.mesh.intersections import intersecting_faces, self_intersecting_pairs
 from posefix.workflow import demo
-from posefix.workflow.cli import library_defaults, run_stage, stage_parser
+from posefix.workflow.cli import run_stage, stage_parser
+from posefix.workflow.settings import add_settings_options
+from posefix.workflow.stage_settings import DemoSettings
 from posefix.io.meshes import write_mesh
 from posefix.workflow.timings import Timings
 
@@ -19,9 +21,7 @@ from posefix.workflow.timings import Timings
 def build_parser():
     parser = stage_parser("demo", __doc__)
     parser.add_argument("--out", required=True, help="folder to write the library into")
-    defaults = library_defaults(demo.demo_library)
-    parser.add_argument("--seed", type=int, default=defaults["seed"], help="seed of the bump pattern")
-    parser.add_argument("--around", type=int, default=defaults["around"], help="vertices per ring of the capsule")
+    add_settings_options(parser, DemoSettings, "demo library (config demo)")
     return parser
 
 

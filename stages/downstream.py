@@ -15,7 +15,9 @@ import posefix.workflow.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; r
 from posefix.downstream.check import downstream_check
 from posefix.downstream.gauss_newton import STOP_REASONS, SolverSettings
 from posefix.io.artifacts import read_artifact, read_repair, write_artifact
-from posefix.workflow.cli import float_list, library_defaults, named_path, run_stage, stage_parser
+from posefix.workflow.cli import named_path, run_stage, stage_parser
+from posefix.workflow.settings import add_settings_options
+from posefix.workflow.stage_settings import DownstreamSettings
 from posefix.io.files import write_figure
 from posefix.workflow.timings import Timings
 from posefix.report import figures
@@ -41,8 +43,6 @@ DOCS = {
 
 def build_parser():
     parser = stage_parser("downstream", __doc__)
-    grid = library_defaults(downstream_check)
-    defaults = SolverSettings()
     parser.add_argument("--keyframes", required=True, help="keyframes.h5 of the pose (reference, target, faces)")
     parser.add_argument("--verify", required=True, help="verify.h5 of the pose (repaired positions)")
     parser.add_argument("--out", required=True, help="downstream.h5 to write")
@@ -51,16 +51,7 @@ def build_parser():
     parser.add_argument("--repair", type=named_path, action="append", default=[], metavar="NAME=PATH",
                         help="another repair's artifact (e.g. medial=<pose>/medial.h5): also deform towards its "
                         "repaired pose; repeatable")
-    parser.add_argument("--alphas", type=float_list, default=list(grid["alphas"]),
-                        help="interpolation weights, e.g. 0.5,1.0")
-    parser.add_argument("--k-bend", type=float_list, default=list(grid["k_bend"]),
-                        help="bending stiffnesses k_b")
-    parser.add_argument("--k-stretch", type=float, default=grid["k_stretch"], help="stretching stiffness k_l")
-    parser.add_argument("--max-iters", type=int, default=defaults.max_iters, help="Gauss-Newton iterations at most")
-    parser.add_argument("--rel-tol", type=float, default=defaults.rel_tol,
-                        help="stop when the relative decrease of the energy falls below this")
-    parser.add_argument("--stall-iters", type=int, default=defaults.stall_iters,
-                        help=f"stop as stalled after this many accepted steps below {defaults.stall_step} in a row")
+    add_settings_options(parser, DownstreamSettings, "Gauss-Newton check (config downstream)")
     return parser
 
 

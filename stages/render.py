@@ -14,10 +14,12 @@ from pathlib import Path
 
 import posefix.workflow.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; runtime defaults before numpy)
 
-from posefix.mesh.distortion import distorted_faces, distortion_summary
+from posefix.mesh.distortion import distorted_faces
 from posefix.mesh.intersections import intersecting_faces, self_intersecting_pairs
 from posefix.io.artifacts import read_artifact, read_repair
-from posefix.workflow.cli import library_defaults, named_path, run_stage, stage_parser
+from posefix.workflow.cli import named_path, run_stage, stage_parser
+from posefix.workflow.settings import add_settings_options
+from posefix.workflow.stage_settings import SummarySettings
 from posefix.io.files import write_figure
 from posefix.workflow.timings import Timings, benchmark_seconds
 from posefix.report import figures
@@ -40,9 +42,7 @@ def build_parser():
     parser.add_argument("--repair", type=named_path, action="append", default=[], metavar="NAME=PATH",
                         help="another repair's artifact (e.g. medial=<pose>/medial.h5), drawn beside the repaired "
                         "pose in renders.png; repeatable")
-    parser.add_argument("--distortion-limit", type=float, default=library_defaults(distortion_summary)["limit"],
-                        help="faces whose edge-length or area ratio exceeds this against both the target and the "
-                        "reference are drawn as distorted")
+    add_settings_options(parser, SummarySettings, "distortion (config summary)")
     return parser
 
 

@@ -17,7 +17,9 @@ import posefix.workflow.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; r
 
 from posefix.io.artifacts import read_artifact, read_repair
 from posefix.mesh.distortion import distortion_summary
-from posefix.workflow.cli import library_defaults, named_path, run_stage, stage_parser
+from posefix.workflow.cli import named_path, run_stage, stage_parser
+from posefix.workflow.settings import add_settings_options
+from posefix.workflow.stage_settings import SummarySettings
 from posefix.io.errors import InputError
 from posefix.io.files import atomic_write_bytes
 from posefix.workflow.timings import benchmark_seconds
@@ -37,9 +39,7 @@ def build_parser():
                         help="comma-separated other repairs to compare (their <pose>/<name>.h5), e.g. medial")
     parser.add_argument("--failed", type=named_path, action="append", default=[], metavar="POSE=ERROR",
                         help="a pose that did not finish and its error line (listed apart; the run failed)")
-    parser.add_argument("--distortion-limit", type=float, default=library_defaults(distortion_summary)["limit"],
-                        help="a face whose edge-length or area ratio exceeds this against both the target and the "
-                        "reference is distorted (its pose is flagged 'check')")
+    add_settings_options(parser, SummarySettings, "summary (config summary)")
     return parser
 
 

@@ -61,7 +61,7 @@ ALLOWED = {
     "contact": {"mesh"}, "downstream": {"mesh", "workflow"},
     "report": {"mesh", "verify", "downstream"},
     "pose_repair": {"mesh", "io", "spacetime", "verify", "report", "workflow"},
-    "workflow": {"mesh", "io", "spacetime", "verify", "medial", "volumetric", "report", "pose_repair"},
+    "workflow": {"mesh", "io", "spacetime", "verify", "medial", "volumetric", "downstream", "report", "pose_repair"},
 }
 """Each part of posefix (a package, or the module pose_repair) -> the parts it may import: the diagram of
 docs/architecture.md ("Packages"). downstream's workflow import is ``posefix.workflow.processes`` (workers that die

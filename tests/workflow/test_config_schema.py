@@ -27,6 +27,7 @@ def test_a_declared_section_gives_options_with_its_defaults_help_and_unit(cls):
     assert set(options) == set(properties) == {f.name for f in fields(cls)}
     for f in fields(cls):
         text = f.metadata["help"]
-        assert options[f.name].default == properties[f.name]["default"] == f.default
+        value = list(f.default) if isinstance(f.default, tuple) else f.default  # (a list in the config)
+        assert options[f.name].default == properties[f.name]["default"] == value
         assert options[f.name].help.startswith(text) and properties[f.name]["description"][1:].startswith(text[1:])
         assert ("bbox diagonal" in options[f.name].help) == ("bbox diagonal" in properties[f.name]["description"])

@@ -10,21 +10,24 @@ import sys
 import yaml
 
 from posefix.mesh.contact_solver import ContactSettings
-from posefix.workflow.stage_settings import (ClassifySettings, ConstraintsSettings, FitOptions, IntegrateSettings,
-                                             KeyframesSettings, MedialRepairSettings, SkeletalPoseSettings,
-                                             SkeletonSettings, TetMeshSettings, VolumetricAnimateSettings,
-                                             VolumetricPoseSettings, VolumetricRepairSettings)
 from posefix.verify.contact_finish import FinishSettings
 from posefix.verify.sequence import RepairSettings
 from posefix.workflow.settings import schema_properties
+from posefix.workflow.stage_settings import (ClassifySettings, ConstraintsSettings, DemoSettings, DownstreamSettings,
+                                             FitOptions, IntegrateSettings, KeyframesSettings, MedialRepairSettings,
+                                             SkeletalPoseSettings, SkeletonSettings, SummarySettings, TetMeshSettings,
+                                             VolumetricAnimateSettings, VolumetricPoseSettings,
+                                             VolumetricRepairSettings)
 
-DECLARED = {"keyframes": (KeyframesSettings,), "classify": (ClassifySettings,), "constraints": (ConstraintsSettings,),
-            "fit": (FitOptions,), "integrate": (IntegrateSettings,), "verify": (RepairSettings, FinishSettings),
-            "contact": (ContactSettings,), "medial.skeleton": (SkeletonSettings,),
-            "medial.repair": (MedialRepairSettings,), "medial.pose": (SkeletalPoseSettings,),
-            "volumetric.repair": (TetMeshSettings, VolumetricRepairSettings),
-            "volumetric.pose": (TetMeshSettings, VolumetricPoseSettings),
-            "volumetric.animate": (TetMeshSettings, VolumetricAnimateSettings)}
+DECLARED = {
+    "demo": (DemoSettings,), "keyframes": (KeyframesSettings,), "classify": (ClassifySettings,),
+    "constraints": (ConstraintsSettings,), "fit": (FitOptions,), "integrate": (IntegrateSettings,),
+    "verify": (RepairSettings, FinishSettings), "contact": (ContactSettings,), "downstream": (DownstreamSettings,),
+    "summary": (SummarySettings,), "medial.skeleton": (SkeletonSettings,), "medial.repair": (MedialRepairSettings,),
+    "medial.pose": (SkeletalPoseSettings,), "volumetric.repair": (TetMeshSettings, VolumetricRepairSettings),
+    "volumetric.pose": (TetMeshSettings, VolumetricPoseSettings),
+    "volumetric.animate": (TetMeshSettings, VolumetricAnimateSettings),
+}
 """Config section -> the dataclasses that declare its settings (the section may hold other keys: a rule's threads, nested
 sections)."""
 

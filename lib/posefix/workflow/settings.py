@@ -5,7 +5,7 @@ library's default is the field's (issue 51: one place per setting).
 A field's metadata: ``help`` (str, lower case, no full stop), optionally ``unit`` (a key of :data:`UNITS`),
 JSON-schema bounds (:data:`BOUNDS`), for a str its ``choices``, and ``cite``: where a paper gives the value (``11
 in S0 §4.1``), which the schema's description says and the option's help does not. A bool is a ``--name``/``--no-name``
-pair.
+pair; a tuple a list (``0.5,1``: its metadata gives the ``items`` type, their ``item_bounds`` and ``minItems``).
 
 Examples
 --------
@@ -26,7 +26,8 @@ UNITS = {"d": "relative to the bbox diagonal d"}
 BOUNDS = ("minimum", "exclusiveMinimum", "maximum", "exclusiveMaximum")
 """The JSON-schema bounds a field's metadata may give."""
 
-_TYPES = {float: ("number", float), int: ("integer", int), bool: ("boolean", None), str: ("string", str)}
+_TYPES = {float: ("number", float), int: ("integer", int), bool: ("boolean", None), str: ("string", str),
+          tuple: ("array", tuple)}
 
 
 def add_settings_options(parser, cls, title):
@@ -34,10 +35,12 @@ def add_settings_options(parser, cls, title):
     dataclass ``cls``: ``--name-with-dashes``, its type, default and help (with its unit)."""
     group = parser.add_argument_group(title)
     for f in fields(cls):
-        unit, kind = f.metadata.get("unit"), _TYPES[_type(f)][1]
+        unit, kind, default = f.metadata.get("unit"), _TYPES[_type(f)][1], f.default
         how = {"action": argparse.BooleanOptionalAction} if kind is None else {"type": _bounded(kind, f.metadata)}
-        group.add_argument(f"--{f.name.replace('_', '-')}", **how, default=f.default, choices=f.metadata.get("choices"),
-                           help=f.metadata["help"] + (f", {UNITS[unit]}" if unit else ""))
+        if kind is tuple:
+            how, default = {"type": _list_of(_bounded(f.metadata["items"], f.metadata.get("item_bounds", {})))}, list(default)
+        group.add_argument(f"--{f.name.replace('_', '-')}", **how, default=default, choices=f.metadata.get("choices"),
+                           help=(f.metadata["help"] + (f", {UNITS[unit]}" if unit else "")).replace("%", "%%"))
 
 
 def _bounded(kind, metadata):
@@ -63,10 +66,19 @@ def _bounded(kind, metadata):
     return parse
 
 
+def _list_of(kind):
+    """An argparse type: a list of ``kind`` from ``0.5,1`` or ``0.5 1``."""
+    def parse(text):
+        return [kind(x) for x in text.replace(",", " ").split()]
+
+    parse.__name__ = f"list of {kind.__name__}"
+    return parse
+
+
 def settings_from(options, cls):
     """An instance of the dataclass ``cls`` from ``options`` (a mapping holding its fields by name: a stage's
-    ``vars(args)``, or a config section)."""
-    return cls(**{f.name: options[f.name] for f in fields(cls)})
+    ``vars(args)``, or a config section; a list where the field is a tuple)."""
+    return cls(**{f.name: tuple(options[f.name]) if _type(f) is tuple else options[f.name] for f in fields(cls)})
 
 
 def schema_properties(cls):
@@ -76,7 +88,11 @@ def schema_properties(cls):
     for f in fields(cls):
         unit, text = f.metadata.get("unit"), f.metadata["help"]
         kind = {"enum": list(f.metadata["choices"])} if "choices" in f.metadata else {"type": _TYPES[_type(f)][0]}
-        out[f.name] = {**kind, **{b: f.metadata[b] for b in BOUNDS if b in f.metadata}, "default": f.default,
+        if _type(f) is tuple:
+            kind |= {"minItems": f.metadata.get("minItems", 0),
+                     "items": {"type": _TYPES[f.metadata["items"]][0], **f.metadata.get("item_bounds", {})}}
+        default = list(f.default) if _type(f) is tuple else f.default
+        out[f.name] = {**kind, **{b: f.metadata[b] for b in BOUNDS if b in f.metadata}, "default": default,
                        "description": _sentence(text) + (f", {UNITS[unit]}" if unit else "")
                        + (f" ({f.metadata['cite']})" if "cite" in f.metadata else "") + "."}
     return out
@@ -89,4 +105,4 @@ def _sentence(text):
 
 def _type(f):
     """A dataclass field's type (a class, also where the annotation is a string)."""
-    return {"float": float, "int": int, "bool": bool, "str": str}.get(f.type, f.type)
+    return {"float": float, "int": int, "bool": bool, "str": str, "tuple": tuple}.get(f.type, f.type)

@@ -1,5 +1,6 @@
 """The stages' settings, declared once where no library settings class holds them (config sections ``keyframes``,
-``classify``, ``constraints``, ``fit``, ``integrate``, ``medial.*``, ``volumetric.*``): each
+``classify``, ``constraints``, ``fit``, ``integrate``, ``downstream``, ``summary``, ``demo``, ``medial.*``,
+``volumetric.*``): each
 field's default (the library function's, where the stage passes the value on unchanged), help, unit and bounds, from
 which :mod:`posefix.workflow.settings` makes the stages' options and :mod:`posefix.workflow.config_schema` the
 schema's sections. Lengths of unit ``d`` are relative to the reference's bounding-box diagonal; the stage scales them.
@@ -9,9 +10,12 @@ schema's sections. Lengths of unit ``d`` are relative to the reference's boundin
 
 from dataclasses import dataclass, field
 
+from posefix.downstream.check import downstream_check
+from posefix.downstream.gauss_newton import SolverSettings
 from posefix.medial.authoring import SkeletalPoser
 from posefix.medial.repair import MedialRepair
 from posefix.medial.skeletal_mesh import skeletal_mesh
+from posefix.mesh.distortion import distortion_summary
 from posefix.spacetime.classification import constraint_mask
 from posefix.spacetime.constraints import spacetime_constraints
 from posefix.spacetime.fit import FitSettings
@@ -21,6 +25,7 @@ from posefix.volumetric.authoring import VolumetricPoser
 from posefix.volumetric.markers import MarkerAnimator
 from posefix.volumetric.repair import VolumetricRepair
 from posefix.volumetric.tet_mesh import tet_mesh
+from posefix.workflow import demo
 from posefix.workflow.cli import library_defaults
 
 
@@ -218,3 +223,45 @@ class VolumetricAnimateSettings:
         "cite": "2-3 in S4 §3.2"})
     first_iterations: int = field(default=library_defaults(MarkerAnimator.animate)["first_iterations"], metadata={
         "help": "volumetric editor iterations of the first frame, from the rest pose's rotations", "minimum": 0})
+
+
+@dataclass(frozen=True)
+class DownstreamSettings:
+    """Stage downstream: Gauss-Newton discrete shells toward the original and the repaired pose (S0 §5), over the
+    grid of ``alphas`` x ``k_bend``."""
+
+    alphas: tuple = field(default=library_defaults(downstream_check)["alphas"], metadata={
+        "help": "interpolation weights of the example, e.g. 0.5,1.0", "items": float, "minItems": 1,
+        "item_bounds": {"exclusiveMinimum": 0, "maximum": 1}})
+    k_bend: tuple = field(default=library_defaults(downstream_check)["k_bend"], metadata={
+        "help": "bending stiffnesses k_b of the grid (one setting by default)", "items": float, "minItems": 1,
+        "item_bounds": {"exclusiveMinimum": 0}})
+    k_stretch: float = field(default=library_defaults(downstream_check)["k_stretch"], metadata={
+        "help": "stretching stiffness k_l", "exclusiveMinimum": 0})
+    max_iters: int = field(default=SolverSettings.max_iters, metadata={
+        "help": "Gauss-Newton iterations at most", "minimum": 1})
+    rel_tol: float = field(default=SolverSettings.rel_tol, metadata={
+        "help": "stop when the relative decrease of the energy falls below this", "minimum": 0})
+    stall_iters: int = field(default=SolverSettings.stall_iters, metadata={
+        "help": f"stop as stalled after this many accepted steps below {SolverSettings.stall_step} in a row",
+        "minimum": 1})
+
+
+@dataclass(frozen=True)
+class SummarySettings:
+    """Stages summary and render: when a repaired face counts as distorted."""
+
+    distortion_limit: float = field(default=library_defaults(distortion_summary)["limit"], metadata={
+        "help": "a face whose edge-length or area ratio (or its inverse) exceeds this against both the target and the "
+                "reference is distorted; a pose with more than 0.1 % of its faces so, or one beyond 10x, is 'check'",
+        "exclusiveMinimum": 1})
+
+
+@dataclass(frozen=True)
+class DemoSettings:
+    """Stage demo: the built-in demo library (a bumpy capsule bent into four poses)."""
+
+    seed: int = field(default=library_defaults(demo.demo_library)["seed"], metadata={
+        "help": "seed of the demo limb's bump pattern"})
+    around: int = field(default=library_defaults(demo.demo_library)["around"], metadata={
+        "help": "vertices per ring of the demo capsule", "minimum": 8})
