@@ -48,6 +48,8 @@ HISTORY = {
     "seconds_solve": ("s", "solve for weights and polynomial per iteration, (I,) float64"),
     "seconds_condition": ("s", "condition estimate per iteration, (I,) float64"),
 }
+DOCS = DOCS | {f"history/{k}": v for k, v in HISTORY.items()}
+"""Every dataset of fit.h5: the field's and, under ``history/``, one value per iteration."""
 
 
 def build_parser():
@@ -99,7 +101,6 @@ def main(args, log):
     log.info("stopped (%s) at %d centres: max error %.3g d, rms %.3g d, max kappa %.3g", reason, fit.n,
              last["max_error"] / d, last["rms_error"] / d, max(r["condition"] for r in fit.history))
     history = {f"history/{k}": np.array([r[k] for r in fit.history]) for k in HISTORY}
-    docs = dict(DOCS, **{f"history/{k}": v for k, v in HISTORY.items()})
     write_artifact(
         args.out, "fit",
         {"centers": points[fit.order], "center_index": fit.order, "weights": fit.weights, "poly": fit.poly,
@@ -115,7 +116,7 @@ def main(args, log):
                  "constraints": len(points), "constraint_vertices": int(attrs["metrics"]["constraint_vertices"]),
                  "resumed_iterations": resumed,
                  "seconds": sum(timings.get(k, 0.0) for k in ("start", "iterate"))},
-        docs=docs)
+        docs=DOCS)
     if not args.keep_checkpoint:
         checkpoint.remove(folder)
 

@@ -33,9 +33,15 @@ DOCS = {
     "skeleton/R": ("length", "medial-ball radii |x - s|, (n,) float64"),
     "skeleton/source": ("label", "which method gave each centre (see the stage log), (n,) int8"),
     "skeleton/bad": ("bool", "centres still outside the surface or crossing it, (n,) bool"),
+    "poses": ("name", "rig poses, in file order, (P,) str"),
+    "variants": ("name", "ssd, variational, flow, (3,) str"),
     "intersecting": ("faces", "intersecting faces per pose and variant (ssd, variational, flow), (P, 3) int64"),
     "error": ("length", "the flow's error sum_i |f(x_i)| (S1 §4) over the deformed balls, per pose and variant, (P, 3) float64"),
     "seconds": ("s", "wall seconds per pose and variant (flow: without its reconstruction), (P, 3) float64"),
+    "flow/<pose>/intersecting": ("faces", "intersecting faces before each flow iteration and after the last, "
+                                          "(k + 1,) int64"),
+    "flow/<pose>/error": ("length", "sum_i |f(x_i)| by Eq. 10's nearest balls at the same moments, (k + 1,) float64"),
+    "flow/<pose>/step_seconds": ("s", "seconds of each flow step (without the intersection test), (k,) float64"),
 }
 
 
