@@ -29,5 +29,6 @@ def test_a_declared_section_gives_options_with_its_defaults_help_and_unit(cls):
         text = f.metadata["help"]
         value = list(f.default) if isinstance(f.default, tuple) else f.default  # (a list in the config)
         assert options[f.name].default == properties[f.name]["default"] == value
-        assert options[f.name].help.startswith(text) and properties[f.name]["description"][1:].startswith(text[1:])
+        shown = options[f.name].help.replace("%%", "%")  # (argparse's escape)
+        assert shown.startswith(text) and properties[f.name]["description"][1:].startswith(text[1:])
         assert ("bbox diagonal" in options[f.name].help) == ("bbox diagonal" in properties[f.name]["description"])
