@@ -42,8 +42,9 @@ def _sections(name, spec):
     if "properties" not in spec:
         return []
     settings = {k: v for k, v in spec["properties"].items() if "properties" not in v}
-    lines = ["", f"## `{name}`", ""] + ([spec["description"], ""] if "description" in spec else [])
-    lines += _table(settings, "") if settings else []
+    body = [spec["description"]] if "description" in spec else []
+    body += ([""] if body else []) + _table(settings, "") if settings else []
+    lines = ["", f"## `{name}`", ""] + body
     for key, sub in spec["properties"].items():
         lines += _sections(f"{name}.{key}", sub)
     return lines
