@@ -315,7 +315,7 @@ def test_a_free_region_pushed_out_of_shape_is_solved_again_from_the_other_start_
     spiked[40, 2] += 0.5  # the centre
     assert cf._out_of_shape(problem, spiked, settings.rest_limit) and not cf._out_of_shape(problem, V, 3.0)
     first = ContactResult(spiked, True, 7, np.zeros(len(V), dtype=bool), np.inf, 0.0)
-    weights = (border, locked, settings.constrained_weight)
+    weights = (border, locked, settings.constrained_weight, settings.second_iterations)
     result, label = cf._lower_energy_result(problem, solver, motion, (first, "tracked"), (V, "integrated"), weights)
     assert label == "integrated (second start)" and result.iterations >= 7
     np.testing.assert_allclose(result.X, V, atol=1e-9)
@@ -329,6 +329,26 @@ def test_a_free_region_pushed_out_of_shape_is_solved_again_from_the_other_start_
     kept, label = cf._lower_energy_result(problem, solver, motion, (crept, "tracked"), (bumped, "integrated"),
                                           weights)
     assert label == "integrated (second start)" and kept.converged  # no severe face either way: converged first
+
+
+def test_a_second_solve_stopped_by_its_iteration_cap_is_not_kept_over_a_converged_first():
+    """The sheet of the test above, its first result out of shape (its centre 0.5 off: faces beyond 4x) but
+    converged, the other start its centre 0.2 off. Stopped after one Newton iteration, the second solve is still on
+    its way (not converged, 0.05 off): the converged first is kept. With the default cap it converges onto the
+    target and is kept (as many faces beyond 10x, none, and a lower energy)."""
+    V, F = grid_sheet(9, 0.0)
+    border = (V[:, 0] % 1.0 == 0.0) | (V[:, 1] % 1.0 == 0.0)
+    problem = RepairProblem.build(V, V, F, border, [self_intersecting_pairs(V, F)] * 2)
+    solver, settings = ContactSolver(V, F), FinishSettings()
+    motion, locked = cf._motion(problem, V, settings), np.zeros(len(V), dtype=bool)
+    spiked, bumped = V.copy(), V.copy()
+    spiked[40, 2] += 0.5
+    bumped[40, 2] += 0.2
+    first = ContactResult(spiked, True, 7, np.zeros(len(V), dtype=bool), np.inf, 0.0)
+    for most, label in ((1, "tracked"), (settings.second_iterations, "integrated (second start)")):
+        kept, kept_label = cf._lower_energy_result(problem, solver, motion, (first, "tracked"), (bumped, "integrated"),
+                                                   (border, locked, settings.constrained_weight, most))
+        assert kept_label == label and kept.converged and kept.iterations <= 7 + most
 
 
 def test_the_second_solve_runs_only_where_the_first_result_would_not_make_the_pose_ok():

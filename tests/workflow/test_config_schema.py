@@ -17,6 +17,13 @@ def test_the_committed_schema_is_what_the_declarations_give():
         "schemas/config.schema.yaml is stale: python -m posefix.workflow.config_schema schemas/config.schema.yaml")
 
 
+def test_a_newly_declared_setting_goes_into_the_schema_after_the_one_declared_before_it():
+    text = (ROOT / "schemas" / "config.schema.yaml").read_text()
+    lines = text.splitlines(keepends=True)
+    line = next(k for k, t in enumerate(lines) if t.startswith("      second_iterations: "))
+    assert declared_schema("".join(lines[:line] + lines[line + 1:])) == text
+
+
 @pytest.mark.parametrize("cls", [cls for classes in DECLARED.values() for cls in classes], ids=lambda c: c.__name__)
 def test_a_declared_section_gives_options_with_its_defaults_help_and_unit(cls):
     parser = argparse.ArgumentParser()

@@ -513,7 +513,7 @@ class ContactSolver:
         return ContactResult(X, converged, iterations, self.contact_vertices(C, len(X)), self.min_distance(X, C),
                              time.perf_counter() - t0)
 
-    def compute_elastic(self, start, goal, weights, elastic, pinned=None):
+    def compute_elastic(self, start, goal, weights, elastic, pinned=None, max_iterations=None):
         """Move ``start`` toward ``goal`` under an elastic energy without leaving the intersection-free set.
 
         Minimizes ``1/2 sum_i w_i a_i |x_i - g_i|^2 + 1/2 l^2 r(x) . r(x) + kappa B(x)`` over the vertices not
@@ -536,6 +536,8 @@ class ContactSolver:
             Vertices that do not move (none by default). Not unknowns: the energy's terms and the barrier's pairs
             among them alone are constant and left out of every step (:meth:`_moving`,
             :meth:`posefix.mesh.shells.ElasticEnergy.restricted`).
+        max_iterations : int, optional
+            Newton iterations at most (``settings.max_iterations`` by default).
 
         Returns
         -------
@@ -547,7 +549,7 @@ class ContactSolver:
                                 elastic.restricted(~pinned) if pinned.any() else elastic, pinned,
                                 self.settings.tolerance)
         with self._moving(~pinned):
-            X, converged, iterations = newton.run(np.array(start, dtype=np.float64))
+            X, converged, iterations = newton.run(np.array(start, dtype=np.float64), max_iterations)
         C = self.collisions(X)
         return ContactResult(X, converged, iterations, self.contact_vertices(C, len(X)), self.min_distance(X, C),
                              time.perf_counter() - t0)

@@ -94,6 +94,11 @@ class FinishSettings:
         iterations on the last key frame) and crushes faces that the elastic solve then has to restore: with 20,
         lion's 9 poses have 50 faces beyond the limit instead of 60, lion-08 takes 29 s instead of 81 s; with 10,
         lion-07 has 12 instead of 7.
+    second_iterations : int
+        ``elastic``: Newton iterations at most of the solve from the candidate start not taken, where the first
+        result would not make the pose *ok* (:func:`_lower_energy_result`). A start that needs many more than the
+        first is creeping along contacts: kids-0001's took 181 (450 s of the finish's 1,041 s) to a result with 81
+        faces beyond 10x against the first's 32, and was thrown away.
     """
 
     free_goal: str = field(default="elastic", metadata={
@@ -118,6 +123,9 @@ class FinishSettings:
     tracked_iterations: int = field(default=20, metadata={
         "help": "elastic finish: Newton iterations at most per key frame of the start tracked through the key frames",
         "minimum": 1})
+    second_iterations: int = field(default=40, metadata={
+        "help": "elastic finish: Newton iterations at most of the second solve, from the start not taken, where the "
+                "first result would not make the pose ok", "minimum": 1})
 
 
 @dataclass(frozen=True)
@@ -130,13 +138,14 @@ class _Motion:
     elastic: object
     free_weight: float
 
-    def solve(self, solver, start, heavy, weight, pinned):
+    def solve(self, solver, start, heavy, weight, pinned, max_iterations=None):
         """The contact solver's result from ``start`` with the vertices ``heavy`` (n,) bool weighted ``weight`` and the
-        others ``free_weight``; ``pinned`` (n,) bool stay where they are (elastic only, else None)."""
+        others ``free_weight``; ``pinned`` (n,) bool stay where they are (elastic only, else None); at most
+        ``max_iterations`` Newton iterations (the solver's setting by default)."""
         weights = np.where(heavy, weight, self.free_weight)
         if self.elastic is None:
-            return solver.compute_pose(start, self.goal, weights, shape=self.shape)
-        return solver.compute_elastic(start, self.goal, weights, self.elastic, pinned)
+            return solver.compute_pose(start, self.goal, weights, shape=self.shape, max_iterations=max_iterations)
+        return solver.compute_elastic(start, self.goal, weights, self.elastic, pinned, max_iterations)
 
 
 @dataclass
@@ -234,7 +243,7 @@ def _solved(problem, solver, paths, motion, locked, settings):
     result = motion.solve(solver, start, heavy, settings.constrained_weight, pinned)
     if other is not None and _not_ok(problem, result):
         result, label = _lower_energy_result(problem, solver, motion, (result, label), other,
-                                             (heavy, locked, settings.constrained_weight))
+                                             (heavy, locked, settings.constrained_weight, settings.second_iterations))
     return result, label, tracked, iterations
 
 
@@ -303,29 +312,31 @@ def _out_of_shape(problem, X, limit):
     return _pushed(problem, X, limit).sum() > DISTORTED_SHARE * len(problem.F) or _pushed(problem, X, SEVERE).any()
 
 
-def _lower_energy_result(problem, solver, motion, first, other, weights):
+def _lower_energy_result(problem, solver, motion, first, other, solve):
     """``(ContactResult, label)``: of the solve from the start taken (``first``: its result and label) and from the
-    candidate not taken (``other``: start and label), the one with fewer faces pushed beyond
-    :data:`~posefix.mesh.distortion.SEVERE` (:func:`_pushed`), then the converged one (cat-08: the second solve crept
-    along a contact for 400 Newton iterations to an energy 16 % lower, and the pose was *check*), then the one of
-    lower energy (the finish's, less the barrier).
+    candidate not taken (``other``: start and label), the converged one, then the one with fewer faces pushed beyond
+    :data:`~posefix.mesh.distortion.SEVERE` (:func:`_pushed`), then the one of lower energy (the finish's, less the
+    barrier). Converged first: a solve stopped by its iteration cap is still on its way, V_C off its targets
+    (kids-0001's second solve after 40 iterations: 23 faces beyond 10x against the first's 34, and an energy of
+    5.0e4 against 0.29), and a creeping solve's lower energy is no better shape (cat-08: 400 Newton iterations
+    along a contact to an energy 16 % lower, and the pose was *check*).
 
     Each start decides on which side of a contact each part ends (:func:`_lower_energy_start`), and an energy
     measured at the start cannot tell where a part will catch on another on the way to its target: a lion pose read
     from a float32 file had a vertex dragged 0.13 d off its target, its edges 46x their length, 4 faces beyond
     10x, from the start of lower energy; from the other start none, and an energy 11 % higher (tiny faces weigh
-    little in it). ``weights``: (heavy (n,) bool, locked (n,) bool, their weight) as the first solve's. Iterations and
-    seconds add up."""
+    little in it). ``solve``: (heavy (n,) bool, locked (n,) bool, their weight) as the first solve's, and the second
+    solve's most Newton iterations (``FinishSettings.second_iterations``). Iterations and seconds add up."""
     (result, label), (start, other_label) = first, other
-    heavy, locked, weight = weights
+    heavy, locked, weight, most = solve
     start, pinned = _pinned(problem, solver, start, locked)
-    second = motion.solve(solver, start, heavy, weight, pinned)
+    second = motion.solve(solver, start, heavy, weight, pinned, most)
     goal_weights = np.where(heavy, weight, motion.free_weight)
-    scores = [(int(_pushed(problem, r.X, SEVERE).sum()), not r.converged,
+    scores = [(not r.converged, int(_pushed(problem, r.X, SEVERE).sum()),
                solver.elastic_energy(r.X, motion.goal, goal_weights, motion.elastic)) for r in (result, second)]
-    log.info("contact finish: not ok from the %s start (%d faces beyond "
-             "%gx, %sconverged, energy %.4g); from the %s start %d, %sconverged, %.4g", label, scores[0][0], SEVERE,
-             "not " * scores[0][1], scores[0][2], other_label, scores[1][0], "not " * scores[1][1], scores[1][2])
+    log.info("contact finish: not ok from the %s start (%sconverged, %d faces beyond %gx, energy %.4g); from the %s "
+             "start %sconverged, %d, %.4g", label, "not " * scores[0][0], scores[0][1], SEVERE, scores[0][2],
+             other_label, "not " * scores[1][0], scores[1][1], scores[1][2])
     kept, label = (second, f"{other_label} (second start)") if scores[1] < scores[0] else (result, label)
     kept.iterations, kept.seconds = result.iterations + second.iterations, result.seconds + second.seconds
     return kept, label

@@ -34,14 +34,20 @@ sections)."""
 
 def declared_schema(text):
     """The schema's ``text`` (str) with the properties of the :data:`DECLARED` sections as their dataclasses give
-    them, str; every other line unchanged."""
+    them, str; a newly declared one goes after the one declared before it; every other line unchanged."""
     lines = text.splitlines(keepends=True)
     for section, classes in DECLARED.items():
         start, end, indent = _section(lines, section)
+        k = None
         for name, prop in [item for cls in classes for item in schema_properties(cls).items()]:
-            k = next(k for k in range(start, end) if lines[k].startswith(f"{indent}{name}: "))
             flow = yaml.safe_dump(prop, default_flow_style=True, sort_keys=False, width=10 ** 6, allow_unicode=True)
-            lines[k] = f"{indent}{name}: {flow.strip()}\n"
+            line = f"{indent}{name}: {flow.strip()}\n"
+            found = next((j for j in range(start, end) if lines[j].startswith(f"{indent}{name}: ")), None)
+            if found is None:
+                k, end = k + 1, end + 1
+                lines.insert(k, line)
+            else:
+                k, lines[found] = found, line
     return "".join(lines)
 
 
@@ -59,6 +65,6 @@ def _section(lines, path):
 
 if __name__ == "__main__":
     with open(sys.argv[1]) as f:
-        text = f.read()
+        schema = declared_schema(f.read())
     with open(sys.argv[1], "w") as f:
-        f.write(declared_schema(text))
+        f.write(schema)
