@@ -32,7 +32,7 @@ from notes import with_notes  # benchmarks/notes.py beside: the hand-written pro
 ROOT = Path(__file__).resolve().parents[1]
 DATA = Path(os.environ.get("POSEFIX_DATA", ROOT.parent / "shared" / "data"))
 KIDS = ("0001.null.0.off.gz", "0001.isometry.1.off.gz")
-CASES = {  # name -> (library folder, reference, pose, baselines)
+CASES = {  # name -> (library folder, reference, pose, repairs)
     "lion-poses": (DATA / "lion-poses", "lion-reference.obj", "lion-01", None),
     "kids-0001": (DATA / "kids-0001", KIDS[0], "0001.isometry.1", None),
     "kids240": (ROOT / "results" / "bench-inputs" / "kids240", "kids240-reference.ply", "kids240-01", "[]"),
@@ -56,14 +56,14 @@ def subdivided_kids(folder):
 def run_case(name, cores, root, run=True, extra=()):
     """Run one pose of case ``name`` in the folder ``root`` (unless ``run`` is False: its results are there);
     its stages' seconds and peak MB, the rules' mem_mb, and MB per artifact. ``extra``: more --config entries."""
-    folder, reference, pose, baselines = CASES[name]
+    folder, reference, pose, repairs = CASES[name]
     start = time.perf_counter()
     if run:
         if name == "kids240":
             subdivided_kids(folder)
         cmd = [sys.executable, "-m", "snakemake", "-s", str(ROOT / "Snakefile"), "--cores", str(cores), "--config",
                f"library={folder}", f"reference={reference}", f"poses={pose}"]
-        cmd += ([f"repairs={baselines}"] if baselines else []) + list(extra)
+        cmd += ([f"repairs={repairs}"] if repairs else []) + list(extra)
         print("+", " ".join(cmd), flush=True)
         subprocess.run(cmd, cwd=root, check=True)
     results = root / "results" / folder.name

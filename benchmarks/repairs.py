@@ -4,7 +4,7 @@ Five repairs of every pose of lion, cat, horse and camel (../shared/data) and th
 targets: space-time integration (S0) with the contact finish's elastic and positional goals (config
 ``verify.free_goal``: elastic, the default, and blend), the medial repair (S1's balls and flow), the volumetric fill
 (S4's editor) and the contact repair (the IPC contact solver through S0's key frames). The pipeline runs twice per
-library in one go: with the elastic finish and every baseline (results/<library>), then with the positional finish
+library in one go: with the elastic finish and every other repair (results/<library>), then with the positional finish
 alone (results/<library>-positional-finish, from the first run's artifacts up to integrate), the downstream check
 towards every repaired pose both times
 (``downstream.repairs: true``; Snakemake reuses what is up to date; ``--quick-downstream``: the default one setting,
@@ -34,19 +34,19 @@ from posefix.report.tables import entry_status, repair_seconds
 ROOT = Path(__file__).resolve().parents[1]
 DATA = Path(os.environ.get("POSEFIX_DATA", ROOT.parent / "shared" / "data"))
 LIBRARIES = ("lion-poses", "cat-poses", "horse-poses", "camel-poses")
-CHECK_BASELINES = f"downstream={ {'repairs': True, **GRID} }"
+CHECK_REPAIRS = f"downstream={ {'repairs': True, **GRID} }"
 """The downstream check towards every repair over the grid of six settings (``make bench``)."""
 QUICK_DOWNSTREAM = "downstream={'repairs': True}"
 ELASTIC_FINISH = "verify={'finish': 'contact', 'free_goal': 'elastic'}"
 POSITIONAL_FINISH = ("verify={'finish': 'contact', 'free_goal': 'blend'}", "repairs=[]")
-"""The second run of a library: S0 with the positional finish, no baselines (they are the first run's)."""
+"""The second run of a library: S0 with the positional finish, no other repairs (they are the first run's)."""
 SUFFIX = "-positional-finish"
 KEEP_INTERMEDIATES = "keep_intermediates=true"
 """The benchmarks of the fit and of the integrated field's accuracy read each pose's constraints.h5."""
 
 
-def run_library(lib, cores, out, extra=(CHECK_BASELINES,), suffix=""):
-    """Run the pipeline on ``lib`` (None: the demo) with the ``extra`` config (the check towards the baselines),
+def run_library(lib, cores, out, extra=(CHECK_REPAIRS,), suffix=""):
+    """Run the pipeline on ``lib`` (None: the demo) with the ``extra`` config (the check towards the other repairs),
     results under <library><suffix>; its summary entries (its summary.md goes to ``out``)."""
     name = (lib.name if lib else "demo") + suffix
     config = ([f"library={lib}"] if lib else []) + ([f"name={name}"] if suffix else [])
@@ -116,23 +116,23 @@ def gauss_newton(downstream, example):
     return converged, sum(len(r["converged"]) for r in runs), sum(sum(r["iterations"]) for r in runs)
 
 
-BASELINES = ("medial", "volumetric", "contact")
+OTHER_REPAIRS = ("medial", "volumetric", "contact")
 LIBRARY_STAGES = {"medial": "skeleton", "volumetric": "tet_mesh"}
-"""The once-per-library stage of a baseline (its seconds are reported apart)."""
-REPAIRS = ("space-time, elastic finish", "space-time, positional finish", *BASELINES)
+"""The once-per-library stage of another repair (its seconds are reported apart)."""
+REPAIRS = ("space-time, elastic finish", "space-time, positional finish", *OTHER_REPAIRS)
 
 
 def method_rows(elastic, positional):
     """Per repair of :data:`REPAIRS`: the figures of one library over its poses (dict of dicts); ``elastic`` and
-    ``positional``: the summary entries of the two runs (the baselines are the first's)."""
+    ``positional``: the summary entries of the two runs (the other repairs are the first's)."""
     rows = {finish: _aggregate([_s0_row(e) for e in entries]) for finish, entries in
             zip(REPAIRS[:2], (elastic, positional))}
-    for name in BASELINES:
+    for name in OTHER_REPAIRS:
         rows[name] = _aggregate([{"clean": b["intersecting_faces"]["repaired_new"] == 0, "ok": None,
                                   "new": b["intersecting_faces"]["repaired_new"], "deviation": b["deviation"],
                                   "distortion": b.get("distortion"), "seconds": b["seconds"],
                                   "gn": gauss_newton(b["downstream"], name) if "downstream" in b else None}
-                                 for b in (e["baselines"][name] for e in elastic)])
+                                 for b in (e["repairs"][name] for e in elastic)])
     rows["target"] = {"gn": np.sum([gauss_newton(e["downstream"], "original") for e in elastic], axis=0).tolist()}
     for finish, entries in zip(REPAIRS[:2], (elastic, positional)):
         rows[finish]["stretched_where_peer_not"] = stretched_where_peer_is_not(entries, elastic)
@@ -142,7 +142,7 @@ def method_rows(elastic, positional):
 def stretched_where_peer_is_not(entries, peer_entries, limit=4.0):
     """Poses whose repair has a face with an edge ratio beyond ``limit`` against both the target and the
     reference (``edge_nearest``) where the contact peer's repair of the same pose has none (int)."""
-    peer = {e["pose"]: e["baselines"]["contact"].get("distortion") for e in peer_entries}
+    peer = {e["pose"]: e["repairs"]["contact"].get("distortion") for e in peer_entries}
     return sum(1 for e in entries if e.get("distortion") and peer.get(e["pose"])
                and e["distortion"]["edge_nearest"] > limit >= peer[e["pose"]]["edge_nearest"])
 
@@ -176,7 +176,7 @@ def markdown(result):
     """The section 'Repairs compared' of BENCHMARKS.md (list of str)."""
     lines = ["## Repairs compared: space-time (elastic and positional finish), medial, volumetric, contact", "",
              "Every pose of each library, the five repairs from the same target (`benchmarks/repairs.py`, which also "
-             "runs alone). Per pose: `summary-<library>.md` (elastic finish and the baselines) and "
+             "runs alone). Per pose: `summary-<library>.md` (elastic finish and the other repairs) and "
              f"`summary-<library>{SUFFIX}.md`." + (" Downstream check: one setting (alpha 1, k_b 1e-2)."
                                                       if result["quick_downstream"] else ""), "",
              "| library | repair | poses | 0 new faces | new faces (all poses) | ok | "
@@ -199,8 +199,8 @@ def markdown(result):
                   "S0's poses with an edge ratio beyond 4 against both where the contact repair's has none; distorted: "
                   "faces beyond config summary.distortion_limit against both the target and the reference. GN: the "
                   "downstream Gauss-Newton check (S0 §5) over config downstream's grid towards each pose. Seconds: "
-                  "wall seconds of the stages per pose (S0: keyframes to verify; a baseline: its repair stage), "
-                  "without the stages a baseline runs once per library (medial: skeleton; volumetric: tet_mesh): "
+                  "wall seconds of the stages per pose (S0: keyframes to verify; another repair: its repair stage), "
+                  "without the stages another repair runs once per library (medial: skeleton; volumetric: tet_mesh): "
               + ", ".join(f"{n} {r['library_seconds']['skeleton']:.1f} s and {r['library_seconds']['tet_mesh']:.1f} s"
                           for n, r in result["libraries"].items()) + ". Measured at commit: "
               + ", ".join(f"{n} {r.get('commit', '?')}" for n, r in result["libraries"].items()) + ".", ""]
@@ -244,7 +244,7 @@ def main():
     names = [n for n in args.libraries.split(",") if n]
     libraries = [DATA / n for n in names if n != "demo" and (DATA / n).is_dir()] + ([None] if "demo" in names else [])
     result = _previous(out / "repairs.json", args.quick_downstream)
-    check = QUICK_DOWNSTREAM if args.quick_downstream else CHECK_BASELINES
+    check = QUICK_DOWNSTREAM if args.quick_downstream else CHECK_REPAIRS
     for lib in libraries:
         name = lib.name if lib else "demo"
         elastic = run_library(lib, args.cores, out, [check, ELASTIC_FINISH])

@@ -36,7 +36,7 @@ from threadpoolctl import threadpool_info
 
 from posefix.report.tables import downstream_grid_markdown, downstream_markdown
 from notes import with_notes  # benchmarks/notes.py beside: the hand-written prose of benchmarks/notes.md
-from repairs import CHECK_BASELINES, KEEP_INTERMEDIATES  # benchmarks/repairs.py beside: the same pipeline call
+from repairs import CHECK_REPAIRS, KEEP_INTERMEDIATES  # benchmarks/repairs.py beside: the same pipeline call
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -76,7 +76,7 @@ def bench_library(lib, out, cores):
     name = lib.name if lib else "demo"
     start = time.perf_counter()
     run(sys.executable, "-m", "snakemake", "--cores", cores, "--config", *([f"library={lib}"] if lib else []),
-        KEEP_INTERMEDIATES, CHECK_BASELINES)
+        KEEP_INTERMEDIATES, CHECK_REPAIRS)
     pipeline_s = time.perf_counter() - start
     results = ROOT / "results" / name
     pieces = {"pipeline_seconds": pipeline_s,

@@ -7,7 +7,7 @@ Two parts, both in one run:
    on one thread each (the fit rule's default), with the largest difference between the two.
 2. **End to end** with ``snakemake --cores 2``: one camel pose (21.9k vertices) and one kids pose (59.7k
    vertices, ``0001.null.0.off.gz`` as reference) through verify, export and the one-setting downstream
-   check of ``make run`` (no baselines), per-stage seconds and peak memory (Snakemake's benchmark files),
+   check of ``make run`` (no other repairs), per-stage seconds and peak memory (Snakemake's benchmark files),
    next to S0's goblin (86k vertices: 10k centres, 603 s fit on a GTX 460 + 4 cores). Snakemake reuses
    results that are up to date: delete ``results/<library>`` for fresh seconds.
 """
@@ -111,7 +111,7 @@ def markdown(evaluation, cases, cores):
                      f"{evaluation['max_relative_difference']:.1e} | {evaluation['device']} |")
     else:
         lines.append(f"| {evaluation['numpy_seconds']:.2f} | - | - | - | {evaluation['device']} |")
-    lines += ["", f"One pose end to end, `snakemake --cores {cores}` (no baselines; downstream: the one setting of "
+    lines += ["", f"One pose end to end, `snakemake --cores {cores}` (no other repairs; downstream: the one setting of "
               "`make run`); seconds (peak MB) per stage from Snakemake's benchmark files:", "",
               "| library | pose | vertices | V_C | " + " | ".join(STAGES) + " | fit + integrate s | all stages s | "
               "centres | fit max error / d | integrated V_C max / d | new outside pass-through |",

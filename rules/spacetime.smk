@@ -91,7 +91,7 @@ rule integrate:
         fit=rules.fit.output[0],
         keyframes=rules.keyframes.output[0],
     output:
-        f"{RESULTS}/{{pose}}/integrate.h5",
+        intermediate(f"{RESULTS}/{{pose}}/integrate.h5"),
     params:
         options=config_flags(config["integrate"]),
         script=stage_script("integrate"),

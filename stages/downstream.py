@@ -25,9 +25,9 @@ from posefix.report import figures
 DOCS = {
     "alpha": ("1", "interpolation weight of the run's targets, (R,) float64"),
     "k_bend": ("1", "bending stiffness k_b of the run, (R,) float64"),
-    "example": ("index", "example of the run: 0 original target, 1 repaired pose, 2... the baselines (examples), "
+    "example": ("index", "example of the run: 0 original target, 1 repaired pose, 2... the other repairs (examples), "
                          "(R,) uint8"),
-    "examples": ("name", "name of each example code: original, repaired, then the baselines, (E,) str"),
+    "examples": ("name", "name of each example code: original, repaired, then the other repairs, (E,) str"),
     "iterations": ("count", "accepted Gauss-Newton steps, (R,) int64"),
     "converged": ("bool", "energy zero, or a full step accepted with |J^T r| reduced 1e4-fold, (R,) bool"),
     "reason": ("index", "stop reason: " + ", ".join(f"{i} {r}" for i, r in enumerate(STOP_REASONS)) + ", (R,) uint8"),
@@ -69,7 +69,7 @@ def main(args, log):
     write_artifact(args.out, "downstream", check.datasets(),
                    params={"alphas": args.alphas, "k_bend": args.k_bend, "k_stretch": args.k_stretch,
                            "max_iters": args.max_iters, "rel_tol": args.rel_tol, "stall_iters": args.stall_iters,
-                           "baselines": [name for name, _ in args.repair]},
+                           "repairs": [name for name, _ in args.repair]},
                    inputs=[args.keyframes, args.verify, *(path for _, path in args.repair)], timings=timings,
                    metrics=check.metrics(), docs=DOCS)
     if args.png:

@@ -60,15 +60,15 @@ def main(args, log):
     reference_faces, target_faces = intersecting_faces(frame_pairs[0], m), intersecting_faces(frame_pairs[-1], m)
     repaired_faces = intersecting_faces(ve["pairs"], m)
     with timings.step("intersections"):
-        baselines = {name: (X, intersecting_faces(self_intersecting_pairs(X, F), m)) for name, X in compared.items()}
+        repairs = {name: (X, intersecting_faces(self_intersecting_pairs(X, F), m)) for name, X in compared.items()}
         distorted = [distorted_faces(X, [V_tgt, V_ref], F, args.distortion_limit)
                      for X in [ve["repaired"], *compared.values()]]
     R = camera(V_ref)
     made = {}
     with timings.step("figures"):
-        poses = {"target": (V_tgt, target_faces), SPACETIME if baselines else "repaired": (ve["repaired"],
+        poses = {"target": (V_tgt, target_faces), SPACETIME if repairs else "repaired": (ve["repaired"],
                                                                                              repaired_faces)}
-        made["renders"] = figures.renders(F, R, poses | baselines, reference_faces, args.pose, distorted)
+        made["renders"] = figures.renders(F, R, poses | repairs, reference_faces, args.pose, distorted)
         made["deviation"] = figures.deviation_map(ve["repaired"], F, R, ve["deviation"], ve["replaced"],
                                                   title=args.pose)
         made["classification"] = figures.classification(

@@ -1,4 +1,4 @@
-"""Stage repair_contact: the contact repair of one pose (IPC), a baseline beside the space-time repair.
+"""Stage repair_contact: the contact repair of one pose (IPC), another repair beside the space-time repair.
 
 The contact solver (``posefix.mesh.contact_solver``, ipctk) carries the reference through the pose's key
 frames (stage keyframes) to the target; every step is bounded by continuous collision detection, so no

@@ -3,7 +3,7 @@
 Reads the metrics of every pose's artifacts (``results/<library>/<pose>/*.h5``) and the Snakemake
 benchmark files, and writes ``reports/<library>/summary.json`` (schema in docs/artifacts.md) and
 ``summary.md`` (``posefix.report.summary``). With ``--repairs``, every pose's entry also compares
-the baseline repairs (``<pose>/<name>.h5``): their intersections, and their deviation from the
+the other repairs (``<pose>/<name>.h5``): their intersections, and their deviation from the
 target over space-time's ``V_C`` (``classify.h5``) and the rest, measured as space-time's. Every repaired pose's distortion
 (worst edge-length and face-area ratios against the target and the reference, faces beyond
 ``--distortion-limit`` against both) is measured here too (``posefix.mesh.distortion``).
@@ -15,7 +15,7 @@ from pathlib import Path
 
 import posefix.workflow.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; runtime defaults before numpy)
 
-from posefix.io.artifacts import read_artifact, read_repair
+from posefix.io.artifacts import metrics_carried, read_artifact, read_repair
 from posefix.mesh.distortion import distortion_summary
 from posefix.workflow.cli import named_path, run_stage, stage_parser
 from posefix.workflow.settings import add_settings_options
@@ -26,7 +26,7 @@ from posefix.workflow.timings import benchmark_seconds
 from posefix.verify.deviation import deviation
 from posefix.report.summary import DOWNSTREAM_DATASETS, SUMMARY_STAGES, repair_entry, pose_entry, summary_markdown
 
-METRICS = ("keyframes", "fit", "integrate", "verify")
+METRICS = ("keyframes", "fit", "verify")
 
 
 def build_parser():
@@ -43,11 +43,12 @@ def build_parser():
     return parser
 
 
-def summarize_pose(results, pose, baselines=(), limit=4.0):
-    """The summary entry of one pose, from its artifacts and benchmark files, with the ``baselines`` (names);
+def summarize_pose(results, pose, repairs=(), limit=4.0):
+    """The summary entry of one pose, from its artifacts and benchmark files, with the ``repairs`` (names);
     ``limit``: the distortion limit."""
     folder = Path(results) / pose
     metrics = {stage: read_artifact(folder / f"{stage}.h5", stage, [])[1]["metrics"] for stage in METRICS}
+    metrics["integrate"] = metrics_carried(metrics["verify"], "integrate")  # integrate.h5 is an intermediate
     shapes = read_artifact(folder / "keyframes.h5", "keyframes", ["reference", "target", "faces"])[0]
     repaired = read_artifact(folder / "verify.h5", "verify", ["repaired"])[0]["repaired"]
     measure = partial(distortion_summary, rests={"target": shapes["target"], "reference": shapes["reference"]},
@@ -55,11 +56,11 @@ def summarize_pose(results, pose, baselines=(), limit=4.0):
     downstream, _ = read_artifact(folder / "downstream.h5", "downstream", list(DOWNSTREAM_DATASETS))
     seconds = {stage: benchmark_seconds(Path(results) / "benchmarks" / pose, stage) for stage in SUMMARY_STAGES}
     compared = {}
-    if baselines:
+    if repairs:
         mask = read_artifact(folder / "classify.h5", "classify", ["mask"])[0]["mask"].astype(bool)
         d = float(metrics["keyframes"]["bbox_diagonal"])
         compared = {name: summarize_repair(folder / f"{name}.h5", name, mask, d, downstream, measure)
-                    for name in baselines}
+                    for name in repairs}
         for name, entry in compared.items():  # wall seconds of the stage, as space-time's (the artifact's: in-process)
             wall = benchmark_seconds(Path(results) / "benchmarks" / pose, f"repair_{name}")
             entry["seconds"] = entry["seconds"] if wall is None else wall
@@ -67,7 +68,7 @@ def summarize_pose(results, pose, baselines=(), limit=4.0):
 
 
 def summarize_repair(path, name, mask, d, downstream, measure):
-    """``baselines.<name>`` of a pose's entry: the artifact's metrics, the deviation of its repaired pose from
+    """``repairs.<name>`` of a pose's entry: the artifact's metrics, the deviation of its repaired pose from
     its start (the target) over ``mask`` (V_C) and the rest relative to ``d``, the downstream runs towards it,
     ``measure`` (its distortion summary) of the repaired pose."""
     data, attrs = read_repair(path, name, ["start", "repaired"])
@@ -80,8 +81,8 @@ def summarize_repair(path, name, mask, d, downstream, measure):
 
 def main(args, log):
     poses = [p for p in args.poses.split(",") if p]
-    baselines = [b for b in args.repairs.split(",") if b]
-    entries = [summarize_pose(args.results, pose, baselines, args.distortion_limit) for pose in poses]
+    repairs = [b for b in args.repairs.split(",") if b]
+    entries = [summarize_pose(args.results, pose, repairs, args.distortion_limit) for pose in poses]
     library = Path(args.results).name
     failed = [{"pose": pose, "error": error} for pose, error in args.failed]
     summary = {"library": library, "poses": entries} | ({"failed": failed} if failed else {})
@@ -91,7 +92,7 @@ def main(args, log):
         log.info("%s: new intersecting faces %d, deviation V_C mean %.2g max %.2g, %.1f s", e["pose"],
                  e["intersecting_faces"]["repaired_new"], e["deviation"]["constrained_mean"],
                  e["deviation"]["constrained_max"], e["seconds_total"])
-        for name, b in e.get("baselines", {}).items():
+        for name, b in e.get("repairs", {}).items():
             log.info("%s, %s: new intersecting faces %d, deviation V_C mean %.2g max %.2g, %.1f s", e["pose"], name,
                      b["intersecting_faces"]["repaired_new"], b["deviation"]["constrained_mean"],
                      b["deviation"]["constrained_max"], b["seconds"])

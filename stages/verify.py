@@ -17,7 +17,7 @@ import posefix.workflow.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; r
 
 from posefix.mesh.contact_solver import ContactSettings
 from posefix.mesh.geometry import unit_scale
-from posefix.io.artifacts import read_artifact, write_artifact
+from posefix.io.artifacts import carried_metrics, read_artifact, write_artifact
 from posefix.workflow.cli import run_stage, stage_parser
 from posefix.workflow.settings import add_settings_options
 from posefix.workflow.timings import Timings
@@ -56,7 +56,7 @@ def main(args, log):
     with timings.step("read"):
         kf, kattrs = read_artifact(args.keyframes, "keyframes", ["reference", "target", "faces", "frames"])
         cl, _ = read_artifact(args.classify, "classify", ["mask", "pairs", "pair_offsets"])
-        it, _ = read_artifact(args.integrate, "integrate", ["positions", "samples"])
+        it, iattrs = read_artifact(args.integrate, "integrate", ["positions", "samples"])
         _, fattrs = read_artifact(args.fit, "fit", [])
     unit = unit_scale(kf["reference"])  # the working unit: a library at 1e-30 or 1e+30 repairs as at 1
     problem = RepairProblem.build(unit * kf["reference"], unit * kf["target"], kf["faces"], cl["mask"],
@@ -71,7 +71,7 @@ def main(args, log):
          "replaced": result.replaced, "new_faces": result.new, "pairs": result.pairs},
         params=params,
         inputs=[args.keyframes, args.classify, args.integrate, args.fit], timings=timings,
-        metrics=result.metrics, docs=DOCS)
+        metrics=result.metrics | carried_metrics(iattrs["metrics"], "integrate"), docs=DOCS)
 
 
 def _say_what_was_left(target, metrics, log):

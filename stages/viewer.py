@@ -1,7 +1,7 @@
 """Stage viewer: the 3D viewer page of a library, ``reports/<library>/viewer.html``.
 
-Reads ``summary.json`` (the poses, their status and baseline repairs) and each pose's ``keyframes.h5``,
-``classify.h5``, ``verify.h5`` and baseline artifacts under ``--results``, and writes one self-contained HTML file
+Reads ``summary.json`` (the poses, their status and other repairs) and each pose's ``keyframes.h5``,
+``classify.h5``, ``verify.h5`` and the other repairs' artifacts under ``--results``, and writes one self-contained HTML file
 that opens offline in any current browser: every pose's target, its repairs and the reference under one camera,
 intersecting faces (red: new, orange: the reference's own), the faces stretched or crushed beyond the summary's
 distortion limit (a repair's against both the target and the reference, the target's against the reference), the
@@ -34,7 +34,7 @@ DISTORTION_LIMIT = library_defaults(distortion_summary)["limit"]
 
 def build_parser():
     parser = stage_parser("viewer", __doc__)
-    parser.add_argument("--summary", required=True, help="summary.json of the library (its poses and baselines)")
+    parser.add_argument("--summary", required=True, help="summary.json of the library (its poses and repairs)")
     parser.add_argument("--results", required=True, help="results/<library> folder (<pose>/*.h5)")
     parser.add_argument("--out", required=True, help="viewer.html to write")
     return parser
@@ -49,9 +49,10 @@ def read_summary(path):
         raise InputError(path, f"not a posefix summary.json ({exc})") from None
 
 
-def read_pose(folder, baselines, reference):
+def read_pose(folder, names, reference):
     """One pose's artifacts: ``(target, repairs, keyframes, classify, verify, keyframes' attributes)``; the target
-    ``(V, hit)``, the repairs ``{name: (V, hit)}`` (space-time first; ``hit``: intersecting faces), keyframes with
+    ``(V, hit)``, the repairs ``{name: (V, hit)}`` (space-time first, then the other repairs ``names``; ``hit``:
+    intersecting faces), keyframes with
     ``reference_hit`` (the reference's intersecting faces) added; its reference and faces checked against
     ``reference`` ``(V, F, ...)`` of the library (None: the first pose, which sets it)."""
     kf, attrs = read_artifact(folder / "keyframes.h5", "keyframes", ["reference", "target", "faces"])
@@ -63,7 +64,7 @@ def read_pose(folder, baselines, reference):
     F, m = kf["faces"], len(kf["faces"])
     frames = split_frames(cl["pairs"], cl["pair_offsets"])
     repairs = {SPACETIME: (ve["repaired"], intersecting_faces(ve["pairs"], m))}
-    for name in baselines:
+    for name in names:
         X = read_repair(folder / f"{name}.h5", name, ["repaired"])[0]["repaired"]
         if X.shape != kf["target"].shape:
             raise InputError(folder / f"{name}.h5", f"repaired {X.shape}, the pose has {kf['target'].shape}")
@@ -77,9 +78,9 @@ def main(args, log):
     library, entries = read_summary(args.summary)
     if not entries:
         raise InputError(args.summary, "lists no pose")
-    baselines, reference, bounds, poses = repair_names(entries), None, [], []
+    names, reference, bounds, poses = repair_names(entries), None, [], []
     for entry in entries:
-        target, repairs, kf, cl, ve, attrs = read_pose(Path(args.results) / entry["pose"], baselines, reference)
+        target, repairs, kf, cl, ve, attrs = read_pose(Path(args.results) / entry["pose"], names, reference)
         reference = (kf["reference"], kf["faces"], kf["reference_hit"], float(attrs["metrics"]["bbox_diagonal"]))
         shown = np.vstack([kf["reference"], target[0], *(X for X, _ in repairs.values())])
         bounds += [shown.min(axis=0), shown.max(axis=0)]

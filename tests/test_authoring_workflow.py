@@ -14,7 +14,7 @@ pytestmark = pytest.mark.pipeline
 
 def repair_options(name):
     """The target and config of the repair of authored library ``name``: S0 alone (the session's demo run checks
-    the baseline repairs) up to the summary, with one downstream step (no figures, no viewer)."""
+    the other repairs) up to the summary, with one downstream step (no figures, no viewer)."""
     return f"reports/{name}/summary.json", "--config", "repairs=[]", "downstream={'max_iters': 1}"
 
 
@@ -42,7 +42,7 @@ def test_author_a_library_from_the_demo_rig_and_repair_it(tmp_path):
 
 def test_author_a_library_from_the_demo_pose_script_and_repair_it(tmp_path):
     """`snakemake volumetric_pose` (S4: the demo pose script -> vol-bend, vol-fold, vol-twist), then the S0
-    repair of the bent one (alone: the session's demo run checks the baseline repairs; the folded one, 525 faces
+    repair of the bent one (alone: the session's demo run checks the other repairs; the folded one, 525 faces
     intersecting, took 93 s of stages in a loaded run against the bent one's 15 s)."""
     proc = snakemake(tmp_path, "volumetric_pose", "--config", "volumetric={'pose': {'tet_vertices': 400}}")
     assert proc.returncode == 0, proc.stderr[-3000:]

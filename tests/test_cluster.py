@@ -10,7 +10,7 @@ munge installed); skipped otherwise. Deselect with ``-m "not cluster"``.
 The run uses the shipped workflow profile unchanged plus the command-line options of
 ``TEST_OPTIONS`` and ``_node_options``, which a cluster without slurmdbd on a small machine needs.
 It repairs one of the demo's four poses, demo-04 (an .obj.gz: equal bytes need gzip without a time stamp;
-``POSEFIX_CLUSTER_POSES``, "all" for the four), with S0 alone (the session's local demo run checks the baseline
+``POSEFIX_CLUSTER_POSES``, "all" for the four), with S0 alone (the session's local demo run checks the other repairs
 repairs): on 2 cores
 every job pays about 7 s for SLURM and the two Snakemake processes it runs, and the plugin checks
 for finished jobs i, i + (i + 10), ... seconds after its last status change (i: the first wait, 9 s
@@ -277,7 +277,7 @@ def _poses(work):
 
 def test_cluster_results_equal_the_local_run(cluster_run):
     """The local run repaired all four poses; the poses of the cluster run are the same bytes and
-    numbers (a pose's stages do not depend on the other poses), the baseline repairs aside (S0 alone here)."""
+    numbers (a pose's stages do not depend on the other poses), the other repairs aside (S0 alone here)."""
     work, returncode, log, jobs, demo_run = cluster_run
     assert returncode == 0, log[-4000:]
     poses = _poses(work)
@@ -289,5 +289,5 @@ def test_cluster_results_equal_the_local_run(cluster_run):
         assert (local / name).read_bytes() == (remote / name).read_bytes(), name
     a, b = (json.loads((run / "reports" / "demo" / "summary.json").read_text()) for run in (demo_run, work))
     assert a["library"] == b["library"]
-    entries = {e["pose"]: {k: v for k, v in _without_timing(e).items() if k != "baselines"} for e in a["poses"]}
+    entries = {e["pose"]: {k: v for k, v in _without_timing(e).items() if k != "repairs"} for e in a["poses"]}
     assert [_without_timing(e) for e in b["poses"]] == [entries[p] for p in poses]

@@ -79,12 +79,13 @@ def test_adding_a_pose_plans_only_that_pose_and_a_code_change_only_what_it_chang
     assert all(jobs[rule] == 1 for rule in per_pose) and jobs["export_repair"] == 3
     proc = run(checkout, tmp_path, *config)
     assert proc.returncode == 0, proc.stderr[-3000:]
-    # a comment in the library module of the verify stage: verify and what reads its output rerun, nothing else
+    # a comment in the library module of the verify stage: verify and what reads its output rerun, and integrate, whose
+    # output verify reads and Snakemake removed (an intermediate), nothing else
     module = checkout / "lib" / "posefix" / "verify" / "sequence.py"
     module.write_text(module.read_text() + "\n# a comment\n")
     jobs = planned(checkout, tmp_path, *config)
-    assert set(jobs) == {"verify", "export", "downstream", "render", "summary", "overview", "viewer", "all"}
-    assert jobs["verify"] == 3
+    assert set(jobs) == {"integrate", "verify", "export", "downstream", "render", "summary", "overview", "viewer", "all"}
+    assert jobs["verify"] == 3 and jobs["integrate"] == 3
 
 
 def digests(folder):

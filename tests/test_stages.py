@@ -137,7 +137,7 @@ def test_downstream_with_threads_runs_the_grid_in_parallel_to_the_same_results(d
 
 @pytest.fixture(scope="module")
 def medial(demo_artifacts):
-    """A baseline artifact as stage repair_medial writes it (the datasets the report reads), whose
+    """Another repair's artifact as stage repair_medial writes it (the datasets the report reads), whose
     repaired pose is S0's (verify.h5's)."""
     from posefix.io.artifacts import write_artifact
     with h5py.File(demo_artifacts / "keyframes.h5", "r") as fh:
@@ -151,7 +151,7 @@ def medial(demo_artifacts):
     return path
 
 
-def test_downstream_checks_a_baseline_as_a_third_example(demo_artifacts, medial, tmp_path):
+def test_downstream_checks_another_repair_as_a_third_example(demo_artifacts, medial, tmp_path):
     run_stage("downstream", "--keyframes", demo_artifacts / "keyframes.h5", "--verify", demo_artifacts / "verify.h5",
               "--alphas", 1.0, "--k-bend", 0.01, "--max-iters", 4, "--repair", f"medial={medial}",
               "--out", tmp_path / "d.h5", "--png", tmp_path / "d.png")
@@ -159,7 +159,7 @@ def test_downstream_checks_a_baseline_as_a_third_example(demo_artifacts, medial,
         assert fh["example"][()].tolist() == [0, 1, 2]
         assert [n.decode() for n in fh["examples"][()]] == ["original", "repaired", "medial"]
         iterations, offsets, errors = fh["iterations"][()], fh["error_offsets"][()], fh["errors"][()]
-        # the same grid towards the same pose: the baseline's run is the repaired one, step for step
+        # the same grid towards the same pose: the other repair's run is the repaired one, step for step
         assert iterations[2] == iterations[1] >= 1
         assert np.array_equal(errors[offsets[2]:offsets[3]], errors[offsets[1]:offsets[2]])
         assert fh["metrics"].attrs["medial_iterations"] == iterations[2] and fh["metrics"].attrs["runs"] == 3
@@ -170,7 +170,7 @@ def test_downstream_checks_a_baseline_as_a_third_example(demo_artifacts, medial,
     assert proc.returncode == 2 and "not a 'repair_medial' artifact" in proc.stderr and not (tmp_path / "e.h5").exists()
 
 
-def test_render_draws_the_baseline_beside_s0(demo_artifacts, medial, tmp_path):
+def test_render_draws_the_other_repair_beside_s0(demo_artifacts, medial, tmp_path):
     from matplotlib.image import imread
     common = ["--keyframes", demo_artifacts / "keyframes.h5", "--classify", demo_artifacts / "classify.h5",
               "--fit", demo_artifacts / "fit.h5", "--verify", demo_artifacts / "verify.h5",

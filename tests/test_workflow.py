@@ -25,8 +25,9 @@ def test_demo_run_produces_every_artifact(demo_run):
     assert (results / "reference.h5").exists()
     for pose in POSES:
         for stage in ("validate", "keyframes", "classify", "constraints", "fit", "integrate", "verify", "downstream"):
-            # constraints.h5 is an intermediate: removed once fit has read it (config keep_intermediates: false)
-            assert (results / pose.name / f"{stage}.h5").exists() == (stage != "constraints")
+            # constraints.h5 and integrate.h5 are intermediates: removed once fit and verify have read them (config
+            # keep_intermediates: false)
+            assert (results / pose.name / f"{stage}.h5").exists() == (stage not in ("constraints", "integrate"))
             assert (results / "benchmarks" / pose.name / f"{stage}.tsv").exists()
             assert (results / "logs" / pose.name / f"{stage}.log").read_text().strip()
         with h5py.File(results / pose.name / "classify.h5", "r") as fh:
@@ -68,30 +69,30 @@ def test_demo_poses_are_repaired(demo_run):
         V, F2 = read_mesh(demo_run / "results" / "demo" / "repaired" / f"{pose.name}{pose.suffix}")
         assert np.array_equal(F, F2) and V.shape == V_tgt.shape
     markdown = (demo_run / "reports" / "demo" / "summary.md").read_text()
-    # the repair table, the downstream table and S0 vs the baseline repairs (config baselines)
+    # the repair table, the downstream table and S0 vs the other repairs (config repairs)
     assert markdown.count("| demo-") == 3 * len(POSES) and "## Space-time vs the other repairs" in markdown
 
 
 @pytest.mark.parametrize("name", ["medial", "volumetric", "contact"])
-def test_the_report_compares_s0_with_the_baseline_repairs(demo_run, name):
-    """summary.json's baselines.<name>: the artifact's numbers and its deviation over S0's V_C, measured as
-    S0's; renders.png has a panel per baseline."""
+def test_the_report_compares_s0_with_the_other_repairs(demo_run, name):
+    """summary.json's repairs.<name>: the artifact's numbers and its deviation over S0's V_C, measured as
+    S0's; renders.png has a panel per other repair."""
     from matplotlib.image import imread
     from posefix.workflow.timings import benchmark_seconds
     from posefix.verify.deviation import deviation
     summary = json.loads((demo_run / "reports" / "demo" / "summary.json").read_text())
     for e in summary["poses"]:
         folder = demo_run / "results" / "demo" / e["pose"]
-        baseline = e["baselines"][name]
+        compared = e["repairs"][name]
         with h5py.File(folder / f"{name}.h5", "r") as fh, h5py.File(folder / "classify.h5", "r") as cl, \
                 h5py.File(folder / "keyframes.h5", "r") as kf:
             metrics = fh["metrics"].attrs
-            assert baseline["intersecting_faces"] == {"repaired": metrics["intersecting_faces_repaired"],
+            assert compared["intersecting_faces"] == {"repaired": metrics["intersecting_faces_repaired"],
                                                       "repaired_new": metrics["intersecting_faces_repaired_new"]}
-            assert baseline["iterations"] == metrics["iterations"]
+            assert compared["iterations"] == metrics["iterations"]
             # wall seconds of the stage, as S0's (the artifact's in-process seconds are less)
             wall = benchmark_seconds(demo_run / "results" / "demo" / "benchmarks" / e["pose"], f"repair_{name}")
-            assert baseline["seconds"] == wall >= metrics["seconds"]
+            assert compared["seconds"] == wall >= metrics["seconds"]
             assert np.array_equal(fh["start"][()], kf["target"][()])  # measured from the same target as S0
             _, dev = deviation(fh["repaired"][()], kf["target"][()], cl["mask"][()],
                                kf["metrics"].attrs["bbox_diagonal"])
@@ -100,8 +101,8 @@ def test_the_report_compares_s0_with_the_baseline_repairs(demo_run, name):
                 assert np.array_equal(fh["repaired"][()][~free], kf["target"][()][~free])
                 assert free[~cl["mask"][()]].all()
             if name == "contact":  # no new intersection, by construction
-                assert baseline["intersecting_faces"]["repaired_new"] == 0 and not fh["new_faces"][()].any()
-        assert baseline["deviation"] == pytest.approx(dev) and "downstream" not in baseline  # downstream.repairs
+                assert compared["intersecting_faces"]["repaired_new"] == 0 and not fh["new_faces"][()].any()
+        assert compared["deviation"] == pytest.approx(dev) and "downstream" not in compared  # downstream.repairs
         figures = demo_run / "reports" / "demo" / "figures" / e["pose"]
         renders, deviation_map = imread(figures / "renders.png"), imread(figures / "deviation.png")
         assert 2 * renders.shape[1] == 5 * deviation_map.shape[1]  # five panels of 5 inches, two of 5
@@ -109,7 +110,7 @@ def test_the_report_compares_s0_with_the_baseline_repairs(demo_run, name):
     assert "<th>new faces space-time / medial / volumetric / contact</th>" in page
 
 
-def test_baselines_reach_the_report_and_the_check(tmp_path):
+def test_other_repairs_reach_the_report_and_the_check(tmp_path):
     """config repairs adds the other repairs' artifacts to summary and render, downstream.repairs to the check;
     repairs=[] leaves them out everywhere."""
     proc = snakemake(tmp_path, "-n", "-p", "--config", "poses=demo-01", "downstream={'repairs': True}")
@@ -239,12 +240,13 @@ def test_nested_config_overrides_reach_the_stages(tmp_path):
     assert proc.returncode != 0 and "classify.exclude names pose(s) not in the library: demo-9" in proc.stderr
 
 
-def test_constraints_are_an_intermediate_unless_kept(tmp_path):
-    removed = "Would remove temporary output results/demo/demo-01/constraints.h5"
+def test_constraints_and_integrate_are_intermediates_unless_kept(tmp_path):
     proc = snakemake(tmp_path, "-n", "--config", "poses=demo-01", "repairs=[]")
-    assert proc.returncode == 0 and removed in proc.stdout + proc.stderr, proc.stderr[-2000:]
+    for name in ("constraints", "integrate"):
+        removed = f"Would remove temporary output results/demo/demo-01/{name}.h5"
+        assert proc.returncode == 0 and removed in proc.stdout + proc.stderr, proc.stderr[-2000:]
     proc = snakemake(tmp_path, "-n", "--config", "poses=demo-01", "repairs=[]", "keep_intermediates=true")
-    assert proc.returncode == 0 and "results/demo/demo-01/constraints.h5" in proc.stdout + proc.stderr
+    assert proc.returncode == 0 and "results/demo/demo-01/integrate.h5" in proc.stdout + proc.stderr
     assert "Would remove temporary output" not in proc.stdout + proc.stderr
 
 
@@ -388,7 +390,7 @@ def test_a_library_at_1e_minus_30_or_1e_plus_30_repairs_as_at_1(tmp_path):
         assert len(runs[1.0]) == len(runs[scale]) == 1
         for ours, theirs in zip(runs[1.0], runs[scale]):
             assert ours["status"] == theirs["status"] and ours["pose"] == theirs["pose"]
-            pairs = [(ours, theirs), (ours["baselines"]["contact"], theirs["baselines"]["contact"])]
+            pairs = [(ours, theirs), (ours["repairs"]["contact"], theirs["repairs"]["contact"])]
             for a, b in pairs:
                 assert a["intersecting_faces"] == b["intersecting_faces"], (scale, ours["pose"])
                 assert a["deviation"] == pytest.approx(b["deviation"], rel=0, abs=1e-9), (scale, ours["pose"])

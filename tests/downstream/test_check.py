@@ -32,14 +32,14 @@ def test_grid_runs_every_setting_towards_both_examples_in_order():
     assert [c["example"] for c in check.curves()] == ["original", "repaired"] * 2
 
 
-def test_a_baseline_is_a_third_example_over_the_same_grid():
+def test_another_repair_is_a_third_example_over_the_same_grid():
     V, F = _strip()
     examples = {"original": _bend(V, 1.0, at=3.0), "repaired": _bend(V, 0.5, at=3.0), "medial": _bend(V, 0.5, at=3.0)}
     check = downstream_check(V, F, examples, alphas=(1.0,), k_bend=(1e-2, 1e-1))
     assert check.grid == [(1.0, k, e) for k in (1e-2, 1e-1) for e in (0, 1, 2)]
     data, metrics = check.datasets(), check.metrics()
     assert data["examples"].tolist() == ["original", "repaired", "medial"] and metrics["runs"] == 6
-    # the baseline's pose equals the repaired one here: its runs are the repaired runs, step for step
+    # the other repair's pose equals the repaired one here: its runs are the repaired runs, step for step
     assert np.array_equal(data["iterations"][data["example"] == 2], data["iterations"][data["example"] == 1])
     assert (metrics["medial_converged"], metrics["medial_iterations"]) == (metrics["repaired_converged"],
                                                                            metrics["repaired_iterations"])

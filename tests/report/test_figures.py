@@ -35,7 +35,7 @@ def test_downstream_history_draws_every_run():
     assert pixels(fig).var() > 0
 
 
-def test_renders_show_a_panel_per_baseline_on_one_scale():
+def test_renders_show_a_panel_per_repair_on_one_scale():
     V, F = icosphere(2)
     R = camera(V)
     faces, none = np.zeros(len(F), bool), np.zeros(len(F), bool)
@@ -53,7 +53,7 @@ def test_renders_show_a_panel_per_baseline_on_one_scale():
     assert pixels(three).var() > 0
 
 
-def test_downstream_history_draws_baselines_dotted():
+def test_downstream_history_draws_other_repairs_dotted():
     runs = [{"alpha": 1.0, "k_bend": 1e-2, "example": ex, "errors": np.geomspace(10.0, 1e-3, 4), "converged": True,
              "reason": "converged"} for ex in ("original", "repaired", "medial")]
     fig = figures.downstream_history(runs, title="x")

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from conftest import run_stage
-from posefix.io.artifacts import write_artifact
+from posefix.io.artifacts import carried_metrics, write_artifact
 from posefix.verify.deviation import deviation
 from posefix.report.summary import SUMMARY_STAGES, repair_entry, downstream_entry, pose_entry, summary_markdown
 
@@ -54,7 +54,7 @@ def test_downstream_entry_lists_runs_per_alpha_and_example_sorted_by_k_bend():
     assert entry["alphas"]["1"]["repaired"]["iterations"] == [3, 5]
 
 
-def test_downstream_entry_of_a_baseline_has_s0s_shape_and_only_its_runs():
+def test_downstream_entry_of_another_repair_has_s0s_shape_and_only_its_runs():
     d = _downstream(medial=True)
     assert downstream_entry(d) == downstream_entry(_downstream())  # S0's entry: its two examples, its seconds
     entry = downstream_entry(d, ("medial",))
@@ -63,7 +63,7 @@ def test_downstream_entry_of_a_baseline_has_s0s_shape_and_only_its_runs():
                                                 "reason": ["converged", "stall"], "final_error": [0.0, 0.0]}}}
 
 
-def _baseline_metrics():
+def _repair_metrics():
     return {"iterations": 12, "best": 9, "seconds": 2.5, "intersecting_faces_target": 40,
             "intersecting_faces_repaired": 6, "intersecting_faces_repaired_new": 5}
 
@@ -75,16 +75,16 @@ def _displaced():
     return start, repaired, np.arange(6) < 3
 
 
-def test_baseline_entry_measures_the_deviation_as_s0():
+def test_repair_entry_measures_the_deviation_as_s0():
     start, repaired, mask = _displaced()
     _, dev = deviation(repaired, start, mask, 2.0)
-    b = repair_entry("medial", _baseline_metrics(), dev, _downstream())
+    b = repair_entry("medial", _repair_metrics(), dev, _downstream())
     assert b["intersecting_faces"] == {"repaired": 6, "repaired_new": 5}
     assert b["iterations"] == 12 and b["seconds"] == 2.5 and "downstream" not in b  # not checked towards it
     assert b["deviation"]["constrained_mean"] == pytest.approx(0.01) and b["deviation"]["constrained_max"] == (
         pytest.approx(0.01))
     assert b["deviation"]["free_mean"] == pytest.approx(0.4 / 3) and b["deviation"]["free_max"] == pytest.approx(0.2)
-    b = repair_entry("medial", _baseline_metrics(), dev, _downstream(medial=True))
+    b = repair_entry("medial", _repair_metrics(), dev, _downstream(medial=True))
     assert b["downstream"] == downstream_entry(_downstream(medial=True), ("medial",))
 
 
@@ -95,7 +95,7 @@ def test_pose_entry_and_its_markdown_row():
                                        "repaired_new_in_fallback": 1, "keyframes_max": 50}
     assert e["fallback"] == {"pass_through": 5, "new_intersection": 2, "reproduced": 90, "pushed": 4}
     assert e["seconds_total"] == 1.5 * (len(SUMMARY_STAGES) - 1) and e["deviation"]["free_p95"] == 1e-3
-    assert "baselines" not in e
+    assert "repairs" not in e
     text = summary_markdown("lib", [e])
     assert text.startswith("# posefix summary: lib\n")
     assert "| p-01 | 196 | 2 / 40 / 50 / 3 | 1 (1) | 80 | 400 | eps |" in text
@@ -103,13 +103,13 @@ def test_pose_entry_and_its_markdown_row():
     assert "baseline" not in text
 
 
-def test_markdown_compares_s0_with_the_baseline_per_pose():
+def test_markdown_compares_s0_with_the_other_repair_per_pose():
     start, repaired, mask = _displaced()
     d = _downstream(medial=True)
-    baselines = {"medial": repair_entry("medial", _baseline_metrics(), deviation(repaired, start, mask, 2.0)[1], d)}
+    repairs = {"medial": repair_entry("medial", _repair_metrics(), deviation(repaired, start, mask, 2.0)[1], d)}
     seconds = dict.fromkeys(SUMMARY_STAGES, 1.5)
-    e = pose_entry("p-01", _metrics(), d, seconds, baselines)
-    assert e["baselines"] == baselines and e == {**pose_entry("p-01", _metrics(), d, seconds), "baselines": baselines}
+    e = pose_entry("p-01", _metrics(), d, seconds, repairs)
+    assert e["repairs"] == repairs and e == {**pose_entry("p-01", _metrics(), d, seconds), "repairs": repairs}
     lines = summary_markdown("lib", [e]).splitlines()
     at = lines.index("## Space-time vs the other repairs")
     assert lines[at + 2] == ("| pose | new faces space-time / medial | V_C dev. mean space-time / medial | V_C dev. max space-time / medial | "
@@ -127,19 +127,21 @@ def _results(folder, medial=True):
     start, repaired, mask = _displaced()
     faces = np.array([[0, 1, 2], [3, 4, 5]])
     shapes = {"keyframes": {"reference": start, "target": start, "faces": faces}, "verify": {"repaired": start}}
-    for stage, metrics in _metrics().items():
-        write_artifact(pose / f"{stage}.h5", stage, shapes.get(stage, {}), metrics=metrics, **write)
+    metrics = _metrics()
+    metrics["verify"] |= carried_metrics(metrics.pop("integrate"), "integrate")  # integrate.h5: an intermediate
+    for stage, values in metrics.items():
+        write_artifact(pose / f"{stage}.h5", stage, shapes.get(stage, {}), metrics=values, **write)
     write_artifact(pose / "downstream.h5", "downstream", _downstream(medial), **write)
     write_artifact(pose / "classify.h5", "classify", {"mask": mask}, **write)
     write_artifact(pose / "medial.h5", "repair_medial", {"start": start, "repaired": repaired},
-                   metrics=_baseline_metrics(), **write)
+                   metrics=_repair_metrics(), **write)
     (folder / "benchmarks" / "p-01").mkdir(parents=True)
     for stage in SUMMARY_STAGES:
         (folder / "benchmarks" / "p-01" / f"{stage}.tsv").write_text("s\th:m:s\n1.5\t0:00:01\n")
     return folder
 
 
-def test_summary_and_overview_stages_compare_the_baseline(tmp_path):
+def test_summary_and_overview_stages_compare_the_other_repair(tmp_path):
     results = _results(tmp_path / "results" / "lib")
     out = tmp_path / "reports"
     out.mkdir()
@@ -147,7 +149,7 @@ def test_summary_and_overview_stages_compare_the_baseline(tmp_path):
     run_stage("summary", *common, "--repairs", "medial", "--out", out / "s.json", "--markdown", out / "s.md")
     run_stage("summary", *common, "--repairs", "", "--out", out / "plain.json", "--markdown", out / "plain.md")
     entry = json.loads((out / "s.json").read_text())["poses"][0]
-    medial = entry.pop("baselines")["medial"]
+    medial = entry.pop("repairs")["medial"]
     assert entry == json.loads((out / "plain.json").read_text())["poses"][0]  # S0's entry unchanged
     assert medial["intersecting_faces"] == {"repaired": 6, "repaired_new": 5} and medial["iterations"] == 12
     assert medial["deviation"]["constrained_max"] == pytest.approx(0.01)  # 0.02 / d = 2 (keyframes' diagonal)

@@ -92,17 +92,17 @@ def test_downstream_counts_compare_only_runs_where_both_converged():
 
 
 def _with_medial(entry, new, vc_max, seconds, converged=None):
-    """``entry`` with a medial baseline (``converged``: its converged runs at k_b 1e-3, 1e-2, 1e-1)."""
+    """``entry`` with the medial repair beside it (``converged``: its converged runs at k_b 1e-3, 1e-2, 1e-1)."""
     medial = {"intersecting_faces": {"repaired": new, "repaired_new": new}, "iterations": 10, "seconds": seconds,
               "deviation": {"constrained_mean": vc_max / 2, "constrained_max": vc_max, "free_mean": 0.1,
                             "free_max": 0.3}}
     if converged is not None:
         medial["downstream"] = {"k_bend": [1e-3, 1e-2, 1e-1], "seconds": 1.0, "alphas": {"1": {"medial": {
             "iterations": [9] * 3, "converged": converged, "final_error": [0.0] * 3, "reason": ["stall"] * 3}}}}
-    return {**entry, "baselines": {"medial": medial}}
+    return {**entry, "repairs": {"medial": medial}}
 
 
-def test_the_comparison_puts_s0_and_the_baseline_side_by_side():
+def test_the_comparison_puts_s0_and_the_other_repair_side_by_side():
     from posefix.report.tables import comparison_table, compared_repairs
     a = _with_medial(_entry("a", new=2), new=7, vc_max=2e-2, seconds=3.25)
     assert compared_repairs(a, ["medial"]) == {
@@ -117,7 +117,7 @@ def test_the_comparison_puts_s0_and_the_baseline_side_by_side():
     assert rows == [["a", "2 / 7", "0.0001 / 0.01", "0.001 / 0.02", "0.05 / 0.3", "6.0 / 3.2"]]
     assert comparison_table([_entry("a")]) == ([], [])
     measured = {"edge_target": 2.5, "area_target": 3.0, "edge_reference": 2.0, "area_reference": 2.0, "limit": 4.0}
-    a["distortion"], a["baselines"]["medial"]["distortion"] = measured | {"faces_over": 0}, measured | {"faces_over": 3}
+    a["distortion"], a["repairs"]["medial"]["distortion"] = measured | {"faces_over": 0}, measured | {"faces_over": 3}
     header, rows = comparison_table([a])
     assert header[5:7] == ["worst edge ratio space-time / medial", "distorted faces space-time / medial"]
     assert rows[0][5:7] == ["2.5 / 2.5", "0 / 3"]
@@ -136,7 +136,7 @@ def test_the_comparison_counts_converged_runs_towards_each_repair():
     assert "'GN converged': Gauss-Newton runs" in comparison_note(header)
 
 
-def test_library_overview_draws_the_baseline_beside_s0():
+def test_library_overview_draws_the_other_repair_beside_s0():
     e = {**_entry("a"), "downstream": _downstream([40, 50, 200], [True, True, False], [20, 30, 25],
                                                    [True, False, True])}
     entries = [_with_medial(e, 4, 1e-3, 2.0, converged=[True, True, False]),

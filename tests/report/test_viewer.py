@@ -58,10 +58,10 @@ def _three_spheres(b_centre):
     return np.vstack([V for V, _ in parts]), np.vstack([F + o for (_, F), o in zip(parts, offsets)])
 
 
-def _entry(pose, baselines):
+def _entry(pose, repairs):
     faces = {"target": 1, "keyframes_max": 1, "repaired": 0, "repaired_new": 0, "repaired_new_in_fallback": 0}
     return {"pose": pose, "intersecting_faces": faces, "deviation": {"constrained_max": 0.0}, "fallback_vertices": 0,
-            "baselines": {name: {} for name in baselines}, "status": {"kind": "ok", "reason": ""}}
+            "repairs": {name: {} for name in repairs}, "status": {"kind": "ok", "reason": ""}}
 
 
 @pytest.fixture(scope="module")

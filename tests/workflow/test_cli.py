@@ -26,9 +26,9 @@ def test_named_paths():
 def test_named_options_are_what_named_path_parses():
     import shlex
     paths = {"medial": "results/my lib/p 1/medial.h5", "other": "o.h5"}
-    words = shlex.split(named_options("--baseline", paths))
-    assert words[::2] == ["--baseline"] * 2 and dict(map(named_path, words[1::2])) == paths
-    assert named_options("--baseline", {}) == ""
+    words = shlex.split(named_options("--repair", paths))
+    assert words[::2] == ["--repair"] * 2 and dict(map(named_path, words[1::2])) == paths
+    assert named_options("--repair", {}) == ""
 
 
 @pytest.fixture

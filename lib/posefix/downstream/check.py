@@ -1,7 +1,7 @@
 """The downstream check (S0 §5): does a Gauss–Newton discrete-shell solver converge better on the repaired pose?
 
 Example-driven deformation (Fröhlich & Botsch 2011) of the reference towards the original target
-and towards the repaired pose (and, optionally, the poses of baseline repairs), over a grid of
+and towards the repaired pose (and, optionally, the poses of other repairs), over a grid of
 interpolation weights alpha and bending stiffnesses k_b (single settings are fragile). The same
 far-apart handle vertices are pinned at their linear blend in every run.
 """
@@ -22,7 +22,7 @@ log = logging.getLogger(__name__)
 
 EXAMPLES = ("original", "repaired")
 """The two examples of S0's downstream check (S0 §5): codes 0 and 1 of downstream.h5's ``example``;
-the baseline repairs checked beside them follow (downstream.h5's ``examples`` names every code)."""
+the other repairs checked beside them follow (downstream.h5's ``examples`` names every code)."""
 
 GRID = {"alphas": [0.5, 1.0], "k_bend": [1e-3, 1e-2, 1e-1]}
 """The grid of six settings (alpha x k_b) to compare original and repaired poses over, as single settings are
@@ -116,7 +116,7 @@ def downstream_check(V_ref, F, examples, alphas=(1.0,), k_bend=(1e-2,), k_stretc
     F : (m, 3) int
     examples : dict of str -> (n, 3) float
         The poses to deform towards, in the order of their example codes: :data:`EXAMPLES`
-        (``original``: the target, ``repaired``), then any baseline repairs by name.
+        (``original``: the target, ``repaired``), then any other repairs by name.
     alphas, k_bend : sequence of float
         Interpolation weights and bending stiffnesses of the grid: one setting by default, :data:`GRID` for the
         robust comparison (single settings are fragile).

@@ -120,6 +120,27 @@ def read_artifact(path, stage, names):
         raise InputError(path, f"cannot be read as HDF5: {str(exc).splitlines()[0]}") from None
 
 
+def carried_metrics(metrics, stage):
+    """The ``metrics`` (dict) of an intermediate ``stage``'s artifact as the artifact that reads it carries them: each
+    key prefixed ``<stage>_``, so that the report reads them once the intermediate is removed (verify.h5 carries
+    integrate.h5's); :func:`metrics_carried` reads them back.
+
+    Examples
+    --------
+    >>> carried_metrics({"backend": "opencl", "steps_max": 9}, "integrate")
+    {'integrate_backend': 'opencl', 'integrate_steps_max': 9}
+    >>> metrics_carried({"integrate_backend": "opencl", "repaired_new": 0}, "integrate")
+    {'backend': 'opencl'}
+    """
+    return {f"{stage}_{key}": value for key, value in metrics.items()}
+
+
+def metrics_carried(metrics, stage):
+    """The metrics of ``stage`` that an artifact's ``metrics`` (dict) carry (:func:`carried_metrics`), dict."""
+    prefix = f"{stage}_"
+    return {key[len(prefix):]: value for key, value in metrics.items() if key.startswith(prefix)}
+
+
 def source_file(path, depth=8):
     """The file a stage artifact was made from, to name in a message about it: following each artifact's first input
     back while all its inputs are artifacts (``.h5``), the last input that is not (fit's constraints.h5 ->
@@ -150,13 +171,13 @@ def source_file(path, depth=8):
 
 
 def read_repair(path, name, names):
-    """:func:`read_artifact` of the artifact of baseline repair ``name`` (written by stage ``repair_<name>``).
+    """:func:`read_artifact` of the artifact of other repair ``name`` (written by stage ``repair_<name>``).
 
     Parameters
     ----------
     path : str or Path
     name : str
-        The baseline, e.g. ``medial`` (stage ``repair_medial``, ``results/<library>/<pose>/medial.h5``).
+        The repair, e.g. ``medial`` (stage ``repair_medial``, ``results/<library>/<pose>/medial.h5``).
     names : list of str
         Datasets to load into memory.
 

@@ -22,12 +22,12 @@ FLAG_COLORS = {REPLACED_PASS_THROUGH: "tab:red", REPLACED_NEW_INTERSECTION: "tab
                RIGID_REFERENCE: "tab:purple", PUSHED: "tab:blue", SEPARATED: "tab:brown", CONTACT: "tab:cyan"}
 """Colour of the vertices of each flag in the deviation figure (the snap's ``REPRODUCED`` is not drawn)."""
 EXAMPLE_STYLES = {"original": "--", "repaired": "-"}
-"""Line style of the downstream runs per example; the baselines' are dotted."""
+"""Line style of the downstream runs per example; the other repairs' are dotted."""
 DEVIATION_MARKERS = (("constrained_max", "o", "V_C max"), ("constrained_mean", "s", "V_C mean"),
                      ("free_max", "^", "free max"))
 """Deviation summaries in the library overview: key, marker, label."""
 REPAIR_COLORS = ("tab:cyan", "tab:olive", "tab:brown")
-"""Colour of each baseline repair (in ``summary.json``'s order) in the library overview."""
+"""Colour of each other repair (in ``summary.json``'s order) in the library overview."""
 CONSTRAINED = (0.25, 0.45, 0.85)
 """Colour of the faces of ``V_C`` (all three corners constrained) in the classification figure and the viewer."""
 FREE = (0.85, 0.85, 0.85)
@@ -226,14 +226,14 @@ def downstream_history(runs, title=""):
     ----------
     runs : list of dict
         One per run: ``alpha``, ``k_bend`` (floats), ``example`` ("original", "repaired" or a
-        baseline's name, drawn dotted), ``errors`` (iterations + 1,) float, ``converged`` (bool),
+        other repair's name, drawn dotted), ``errors`` (iterations + 1,) float, ``converged`` (bool),
         ``reason`` (str).
     """
     alphas = sorted({r["alpha"] for r in runs})
     k_bends = sorted({r["k_bend"] for r in runs})
     colors = {k: f"C{i}" for i, k in enumerate(k_bends)}
-    baselines = sorted({r["example"] for r in runs} - set(EXAMPLE_STYLES))
-    styles = "solid: repaired, dashed: original" + (f", dotted: {', '.join(baselines)}" if baselines else "")
+    repairs = sorted({r["example"] for r in runs} - set(EXAMPLE_STYLES))
+    styles = "solid: repaired, dashed: original" + (f", dotted: {', '.join(repairs)}" if repairs else "")
     fig = Figure(figsize=(5 * len(alphas) + 1, 4.2), dpi=DPI)
     for i, alpha in enumerate(alphas):
         ax = fig.add_subplot(1, len(alphas), i + 1)
@@ -269,7 +269,7 @@ def _intersection_panel(ax, x, entries, names):
     ax.bar(x + dx[1], new - inside, width, color="tab:red", label=f"{s0}: new")
     ax.bar(x + dx[1], inside, width, bottom=new - inside, color="tab:pink", label=f"{s0}: new, in pass-through")
     for j, name in enumerate(names):
-        ax.bar(x + dx[2 + j], [e["baselines"][name]["intersecting_faces"]["repaired_new"] for e in entries], width,
+        ax.bar(x + dx[2 + j], [e["repairs"][name]["intersecting_faces"]["repaired_new"] for e in entries], width,
                color=REPAIR_COLORS[j], label=f"{name}: new")
     ax.set_ylabel("intersecting faces")
     ax.legend(fontsize=8)
@@ -278,7 +278,7 @@ def _intersection_panel(ax, x, entries, names):
 def _deviation_panel(ax, x, entries, names, bar):
     """Overview panel 2: deviations from the target, space-time filled markers, each other repair hollow beside it."""
     sources = [("space-time " if names else "", 0.0, "full", [e["deviation"] for e in entries])]
-    sources += [(f"{name} ", 0.15 * (j + 1), "none", [e["baselines"][name]["deviation"] for e in entries])
+    sources += [(f"{name} ", 0.15 * (j + 1), "none", [e["repairs"][name]["deviation"] for e in entries])
                 for j, name in enumerate(names)]
     for prefix, shift, fill, deviations in sources:
         for j, (key, marker, label) in enumerate(DEVIATION_MARKERS):
@@ -292,7 +292,7 @@ def _deviation_panel(ax, x, entries, names, bar):
 
 
 def _seconds_panel(ax, x, entries, names):
-    """Overview panel 4: wall seconds per stage, and beside them each baseline's repair (hatched)."""
+    """Overview panel 4: wall seconds per stage, and beside them each other repair's stage (hatched)."""
     dx, width = _offsets(1 + len(names))
     bottom = np.zeros(len(entries))
     for stage in entries[0]["seconds_stages"]:
@@ -300,19 +300,19 @@ def _seconds_panel(ax, x, entries, names):
         ax.bar(x + dx[0], values, width, bottom=bottom, label=stage)
         bottom += values
     for j, name in enumerate(names):
-        ax.bar(x + dx[1 + j], [e["baselines"][name]["seconds"] for e in entries], width, color=REPAIR_COLORS[j],
+        ax.bar(x + dx[1 + j], [e["repairs"][name]["seconds"] for e in entries], width, color=REPAIR_COLORS[j],
                hatch="//", label=f"{name} repair")
     ax.set_ylabel("wall seconds per stage")
     ax.legend(fontsize=7, ncol=2)
 
 
 def _downstream_panels(fig, x, entries, names):
-    """Overview panels 5 and 6: Gauss–Newton convergence (original, repaired and the baselines ``names``)
+    """Overview panels 5 and 6: Gauss–Newton convergence (original, repaired and the other repairs ``names``)
     and iterations, original vs repaired."""
     counts, s0 = [downstream_counts(e) for e in entries], SPACETIME if names else "repaired pose"
     series = [([c["converged_original"] for c in counts], "original target", "tab:gray"),
               ([c["converged_repaired"] for c in counts], s0, "tab:green")]
-    series += [([converged_runs(e["baselines"][name]["downstream"], name) for e in entries], name, REPAIR_COLORS[j])
+    series += [([converged_runs(e["repairs"][name]["downstream"], name) for e in entries], name, REPAIR_COLORS[j])
                for j, name in enumerate(names)]
     ax = fig.add_subplot(3, 2, 5)
     dx, width = _offsets(len(series))
@@ -334,7 +334,7 @@ def _downstream_panels(fig, x, entries, names):
 def library_overview(entries, bar=DEVIATION_BAR, title=""):
     """All poses of a library at a glance: intersections, deviation, centres, seconds, and the
     downstream Gauss–Newton check (converged runs, iterations) when the entries have it; the
-    other repairs (``summary.json``'s ``baselines``) beside space-time's.
+    other repairs (``summary.json``'s ``repairs``) beside space-time's.
 
     Parameters
     ----------
@@ -359,7 +359,7 @@ def library_overview(entries, bar=DEVIATION_BAR, title=""):
     ax.legend(fontsize=8)
     _seconds_panel(fig.add_subplot(rows, 2, 4), x, entries, names)
     if rows == 3:
-        checked = [n for n in names if all("downstream" in e["baselines"][n] for e in entries)]
+        checked = [n for n in names if all("downstream" in e["repairs"][n] for e in entries)]
         _downstream_panels(fig, x, entries, checked)
     for ax in fig.axes:
         ax.set_xticks(x, poses, rotation=45, ha="right", fontsize=8)

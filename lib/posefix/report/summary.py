@@ -16,7 +16,7 @@ SUMMARY_STAGES = ("keyframes", "classify", "constraints", "fit", "integrate", "v
 """Stages whose wall seconds a summary entry adds up (``seconds_stages``)."""
 
 
-def pose_entry(pose, metrics, downstream, seconds, baselines=None, distortion=None):
+def pose_entry(pose, metrics, downstream, seconds, repairs=None, distortion=None):
     """The summary entry of one pose.
 
     Parameters
@@ -29,8 +29,8 @@ def pose_entry(pose, metrics, downstream, seconds, baselines=None, distortion=No
         Datasets of ``downstream.h5`` (:func:`downstream_entry`).
     seconds : dict of str -> float or None
         Wall seconds per stage of :data:`SUMMARY_STAGES` (None where unknown).
-    baselines : dict of str -> dict, optional
-        :func:`repair_entry` per baseline repair of the pose (key ``baselines``; none: no key).
+    repairs : dict of str -> dict, optional
+        :func:`repair_entry` per other repair of the pose (key ``repairs``; none: no key).
     distortion : dict, optional
         :func:`posefix.mesh.distortion.distortion_summary` of the repaired pose against the target and the
         reference (key ``distortion``; none: no key).
@@ -50,7 +50,7 @@ def pose_entry(pose, metrics, downstream, seconds, baselines=None, distortion=No
         "integrate": {"backend": str(it["backend"]), "device": str(it["device"]), "seconds": float(it["seconds"]),
                       "steps_mean": float(it["steps_mean"]), "steps_max": int(it["steps_max"])},
         "downstream": downstream_entry(downstream),
-        **({"baselines": baselines} if baselines else {}),
+        **({"repairs": repairs} if repairs else {}),
         "seconds_stages": seconds, "seconds_total": sum(v for v in seconds.values() if v is not None)}
     return entry | verified_entry(metrics["verify"], entry["faces"], distortion)
 
@@ -86,12 +86,12 @@ def _finish_entry(verify):
 
 
 def repair_entry(name, metrics, deviation, downstream, distortion=None):
-    """The summary of one baseline repair of a pose (``baselines.<name>`` of its entry).
+    """The summary of one other repair of a pose (``repairs.<name>`` of its entry).
 
     Parameters
     ----------
     name : str
-        The baseline (``medial``).
+        The other repair (``medial``).
     metrics : dict
         The ``metrics`` of its artifact (``<pose>/<name>.h5``).
     deviation : dict
@@ -99,9 +99,9 @@ def repair_entry(name, metrics, deviation, downstream, distortion=None):
         (:func:`posefix.verify.deviation.deviation`, the same as space-time's).
     downstream : dict of str -> ndarray
         Datasets of ``downstream.h5``; the entry gets a ``downstream`` like space-time's (:func:`downstream_entry`)
-        when the check ran towards the baseline.
+        when the check ran towards the other repair.
     distortion : dict, optional
-        As :func:`pose_entry`'s, of the baseline's repaired pose.
+        As :func:`pose_entry`'s, of the other repair's repaired pose.
 
     Returns
     -------

@@ -136,9 +136,9 @@ def _downstream_row(name, c):
 
 
 def repair_names(entries):
-    """The baseline repairs every entry has (``summary.json``'s ``baselines``), in their order, list of str."""
-    first = entries[0].get("baselines", {}) if entries else {}
-    return [name for name in first if all(name in e.get("baselines", {}) for e in entries)]
+    """The other repairs every entry has (``summary.json``'s ``repairs``), in their order, list of str."""
+    first = entries[0].get("repairs", {}) if entries else {}
+    return [name for name in first if all(name in e.get("repairs", {}) for e in entries)]
 
 
 def repair_seconds(entry):
@@ -162,12 +162,12 @@ def compared_repairs(entry, names):
     """
     out = {SPACETIME: _compared(entry, repair_seconds(entry), "repaired")}
     for name in names:
-        out[name] = _compared(entry["baselines"][name], entry["baselines"][name]["seconds"], name)
+        out[name] = _compared(entry["repairs"][name], entry["repairs"][name]["seconds"], name)
     return out
 
 
 def _compared(repair, seconds, example):
-    """One value of :func:`compared_repairs` from an entry or a baseline's entry (the same keys)."""
+    """One value of :func:`compared_repairs` from an entry or another repair's entry (the same keys)."""
     dev, down, distortion = repair["deviation"], repair.get("downstream"), repair.get("distortion", {})
     return {"new": repair["intersecting_faces"]["repaired_new"], "constrained_mean": dev["constrained_mean"],
             "constrained_max": dev["constrained_max"], "free_max": dev["free_max"],
@@ -186,7 +186,7 @@ def comparison_table(entries):
     """Space-time vs the other repairs per pose: ``(header, rows)``, lists of str, one cell ``space-time / <repair> ...``
     per :data:`COMPARISON` column (``GN converged`` only when every repair has the downstream check, the
     distortion columns only when every repair was measured);
-    ``([], [])`` without baselines."""
+    ``([], [])`` without repairs."""
     names = repair_names(entries)
     if not names:
         return [], []
@@ -214,7 +214,7 @@ def comparison_note(header):
 
 
 def comparison_markdown(entries):
-    """``summary.md``'s section comparing space-time with the other repairs, list of str lines (none without baselines)."""
+    """``summary.md``'s section comparing space-time with the other repairs, list of str lines (none without repairs)."""
     header, rows = comparison_table(entries)
     if not rows:
         return []
@@ -224,7 +224,7 @@ def comparison_markdown(entries):
 
 
 def _comparison_html(entries):
-    """The HTML section of :func:`comparison_table` (empty without baselines), str."""
+    """The HTML section of :func:`comparison_table` (empty without repairs), str."""
     header, rows = comparison_table(entries)
     if not rows:
         return ""

@@ -1,6 +1,6 @@
 """The 3D viewer page of a library (``reports/<library>/viewer.html``): one self-contained, offline HTML file.
 
-Every pose's target, its repairs (space-time and the baselines) and the reference, drawn with three.js (vendored,
+Every pose's target, its repairs (space-time and the other repairs) and the reference, drawn with three.js (vendored,
 ``vendor/three/``) under one camera; intersecting faces coloured as in the report's renders, the deviation heat map
 on the report's scale, ``V_C`` / free / pass-through regions, a pose list with each pose's status.
 
@@ -70,7 +70,7 @@ def mesh_record(name, V, hit, reference_hit, base=None, distorted=None):
     Parameters
     ----------
     name : str
-        ``target``, ``space-time``, a baseline's name or ``reference``.
+        ``target``, ``space-time``, another repair's name or ``reference``.
     V : (n, 3) float
     hit : (m,) bool
         Its intersecting faces.

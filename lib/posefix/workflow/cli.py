@@ -215,5 +215,5 @@ def put_interpreter_first_on_path():
 
 def named_options(option, paths):
     """Shell-quoted command-line options ``<option> <name>=<path>`` for ``paths`` {name: path}, str (what
-    :func:`named_path` parses; the rules pass the baseline artifacts to the stages with it)."""
+    :func:`named_path` parses; the rules pass the other repairs' artifacts to the stages with it)."""
     return " ".join(f"{option} {shlex.quote(f'{name}={path}')}" for name, path in paths.items())

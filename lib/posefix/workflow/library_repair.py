@@ -225,7 +225,7 @@ def _outcome(name, results, reports, log_path):
     poses = []
     for entry in entries:
         kind, reason = entry_status(entry)
-        folders = {SPACETIME: "repaired"} | {repair: f"repaired-{repair}" for repair in entry.get("baselines", {})}
+        folders = {SPACETIME: "repaired"} | {repair: f"repaired-{repair}" for repair in entry.get("repairs", {})}
         meshes = {repair: sorted(results.glob(f"{folder}/{glob.escape(entry['pose'])}.*"))
                   for repair, folder in folders.items()}
         poses.append(PoseOutcome(entry["pose"], kind, reason, entry["intersecting_faces"],

@@ -19,7 +19,7 @@ margin (at most 18 % above the line: keyframes) in the stages it ran, verify's 4
 the volumetric repair's lines are the latest run's (f2b5d3f: up to 37 % above the run before); the downstream
 check's is the line through its three sizes with its Cholesky on CHOLMOD (6429b20: 431, 1689 and 6089 MB); the
 others that run's (the latest peaks at most 6 % above them). The 3D viewer's is the line through lion (123 MB: 9
-poses with every repair, read one at a time) and a synthetic 92k-vertex pose with three baselines (265 MB). The
+poses with every repair, read one at a time) and a synthetic 92k-vertex pose with three other repairs (265 MB). The
 fit's rule asks for its kernel cache's budget instead (config fit.memory_gb: the cache shrinks to what the job
 gets)."""
 OTHER_MB = (300, 10)
