@@ -51,7 +51,7 @@ def main(args, log):
     settings = settings_from(vars(args), ContactSettings)
     params = asdict(settings)
     with timings.step("prepare"):
-        solver = ContactSolver(unit * frames[0], F, reference_pairs, settings, args.threads)
+        solver = ContactSolver(unit * frames[0], F, reference_pairs, settings)
     with timings.step("repair"):
         result = track_keyframes(solver, unit * frames, reference_faces)
     metrics = result.metrics | {"intersecting_faces_reference": int(reference_faces.sum()),

@@ -99,7 +99,7 @@ def _finish(args, problem, integrated, fit_attrs):
     eps = json.loads(fit_attrs["config"])["eps_rel"] * d
     settings = finish_settings(vars(args))
     result = finished_pose(problem, (unit * integrated["samples"], unit * frames), d, settings,
-                           (eps, float(fit_attrs["metrics"]["max_error_rel"])), args.threads)
+                           (eps, float(fit_attrs["metrics"]["max_error_rel"])))
     repair, finish, contact = map(asdict, settings)
     return result, repair if args.finish == "snap" else {"finish": "contact"} | finish | contact
 

@@ -232,7 +232,6 @@ def _finished(shapes, classified, paths, fitted, config):
     problem = RepairProblem.build(unit * V_ref, unit * V_tgt, F, mask, frame_pairs)
     settings = finish_settings(config["verify"] | config["contact"])
     fit_errors = (config["fit"]["eps_rel"] * d * unit, fit.history[-1]["max_error"] / d)
-    result = finished_pose(problem, tuple(unit * np.asarray(p) for p in paths), unit * d, settings, fit_errors,
-                           config["verify"]["threads"])
+    result = finished_pose(problem, tuple(unit * np.asarray(p) for p in paths), unit * d, settings, fit_errors)
     result.X = result.X / unit
     return result

@@ -190,7 +190,7 @@ def finish_settings(options):
                  for kind in (RepairSettings, FinishSettings, ContactSettings))
 
 
-def finished_pose(problem, paths, d, settings, fit_errors, threads=1):
+def finished_pose(problem, paths, d, settings, fit_errors):
     """Repair an integrated pose with the finish of ``settings`` and verify it (:func:`finish_pose` or the snap
     finish's :func:`repair_pose`).
 
@@ -207,8 +207,6 @@ def finished_pose(problem, paths, d, settings, fit_errors, threads=1):
     fit_errors : tuple of float
         The fit's error threshold (length units) and its max error at its end relative to ``d`` (the snap
         finish's reach).
-    threads : int
-        The contact solver's threads.
 
     Returns
     -------
@@ -217,7 +215,7 @@ def finished_pose(problem, paths, d, settings, fit_errors, threads=1):
     (samples, frames), (repair, finish, contact) = paths, settings
     if repair.finish == "snap":
         return repair_pose(problem, samples[-1], d, fit_errors[0], fit_errors[1], repair)
-    solver = ContactSolver(problem.V_ref, problem.F, problem.frame_pairs[0], contact, threads)
+    solver = ContactSolver(problem.V_ref, problem.F, problem.frame_pairs[0], contact)
     return finish_pose(problem, samples, d, solver, finish, frames)
 
 
