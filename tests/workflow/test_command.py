@@ -84,7 +84,7 @@ def test_posefix_repair_from_another_folder_matches_the_workflow_run(demo_run, t
                           "posefix: 3D viewer: reports/demo/viewer.html"], lines
     name = "results/demo/repaired/demo-01.obj"
     assert (tmp_path / name).read_bytes() == (demo_run / name).read_bytes()
-    for stage in ("keyframes", "classify", "fit", "integrate", "verify"):  # deterministic: the same numbers
+    for stage in ("keyframes", "classify", "fit", "verify"):  # deterministic: the same numbers
         a, b = (h5_datasets(run / "results" / "demo" / "demo-01" / f"{stage}.h5") for run in (demo_run, tmp_path))
         assert a.keys() == b.keys() and all(np.array_equal(a[k], b[k]) for k in a if "seconds" not in k), stage
     assert not (tmp_path / "results" / "demo" / "demo-02").exists()
