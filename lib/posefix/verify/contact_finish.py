@@ -97,8 +97,9 @@ class FinishSettings:
     second_iterations : int
         ``elastic``: Newton iterations at most of the solve from the candidate start not taken, where the first
         result would not make the pose *ok* (:func:`_lower_energy_result`). A start that needs many more than the
-        first is creeping along contacts: kids-0001's took 181 (450 s of the finish's 1,041 s) to a result with 81
-        faces beyond 10x against the first's 32, and was thrown away.
+        first is creeping along contacts: kids-0001's took 70 at ``--threads 1`` and 181 in a run at 2 threads (450 s
+        of the finish's 1,041 s), to results with 103 and 81 faces beyond 10x against the first's 34 and 32, and
+        was thrown away.
     """
 
     free_goal: str = field(default="elastic", metadata={
@@ -317,8 +318,8 @@ def _lower_energy_result(problem, solver, motion, first, other, solve):
     candidate not taken (``other``: start and label), the converged one, then the one with fewer faces pushed beyond
     :data:`~posefix.mesh.distortion.SEVERE` (:func:`_pushed`), then the one of lower energy (the finish's, less the
     barrier). Converged first: a solve stopped by its iteration cap is still on its way, V_C off its targets
-    (kids-0001's second solve after 40 iterations: 23 faces beyond 10x against the first's 34, and an energy of
-    5.0e4 against 0.29), and a creeping solve's lower energy is no better shape (cat-08: 400 Newton iterations
+    (kids-0001's second solve after 40 iterations, in a run at 2 threads: 23 faces beyond 10x against the first's
+    34, and an energy of 5.0e4 against 0.29), and a creeping solve's lower energy is no better shape (cat-08: 400 Newton iterations
     along a contact to an energy 16 % lower, and the pose was *check*).
 
     Each start decides on which side of a contact each part ends (:func:`_lower_energy_start`), and an energy
