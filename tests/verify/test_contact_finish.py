@@ -10,7 +10,7 @@ from posefix.mesh.contact_solver import ContactResult, ContactSettings, ContactS
 from posefix.mesh.geometry import face_areas
 from posefix.mesh.primitives import capsule
 from posefix.mesh.topology import grow_rings, vertex_adjacency
-from posefix.mesh.distortion import distortion_summary, face_distortion
+from posefix.mesh.distortion import SEVERE, distortion_summary, face_distortion
 from posefix.mesh.intersections import intersecting_faces, self_intersecting_pairs
 from posefix.mesh.rotations import rotation_exp
 from posefix.verify import contact_finish as cf
@@ -332,18 +332,19 @@ def test_a_free_region_pushed_out_of_shape_is_solved_again_from_the_other_start_
 
 
 def test_a_second_solve_stopped_by_its_iteration_cap_is_not_kept_over_a_converged_first():
-    """The sheet of the test above, its first result out of shape (its centre 0.5 off: faces beyond 4x) but
+    """The sheet of the test above, its first result out of shape (its centre 2 off: 6 faces beyond 10x) but
     converged, the other start its centre 0.2 off. Stopped after one Newton iteration, the second solve is still on
-    its way (not converged, 0.05 off): the converged first is kept. With the default cap it converges onto the
-    target and is kept (as many faces beyond 10x, none, and a lower energy)."""
+    its way (not converged, 0.05 off, no face beyond 10x): the converged first is kept, though it has more faces
+    beyond 10x. With the default cap the second converges onto the target and is kept."""
     V, F = grid_sheet(9, 0.0)
     border = (V[:, 0] % 1.0 == 0.0) | (V[:, 1] % 1.0 == 0.0)
     problem = RepairProblem.build(V, V, F, border, [self_intersecting_pairs(V, F)] * 2)
     solver, settings = ContactSolver(V, F), FinishSettings()
     motion, locked = cf._motion(problem, V, settings), np.zeros(len(V), dtype=bool)
     spiked, bumped = V.copy(), V.copy()
-    spiked[40, 2] += 0.5
+    spiked[40, 2] += 2.0
     bumped[40, 2] += 0.2
+    assert cf._pushed(problem, spiked, SEVERE).sum() == 6 and not cf._pushed(problem, bumped, SEVERE).any()
     first = ContactResult(spiked, True, 7, np.zeros(len(V), dtype=bool), np.inf, 0.0)
     for most, label in ((1, "tracked"), (settings.second_iterations, "integrated (second start)")):
         kept, kept_label = cf._lower_energy_result(problem, solver, motion, (first, "tracked"), (bumped, "integrated"),
