@@ -15,31 +15,17 @@ from posefix.mesh.contacts import contact_vertices
 from posefix.mesh.geometry import bbox_diagonal
 from posefix.mesh.intersections import intersecting_faces, new_pairs, self_intersecting_pairs
 from posefix.io.artifacts import read_artifact, write_artifact
-from posefix.workflow.cli import int_list, run_stage, stage_parser
-from posefix.workflow.settings import add_settings_options
+from posefix.workflow.cli import dataset_docs, int_list, run_stage, stage_parser
 from posefix.io.errors import InputError
 from posefix.io.library import read_vertex_ids
 from posefix.workflow.timings import Timings
 from posefix.spacetime.classification import constraint_mask
 from posefix.workflow.stage_settings import ClassifySettings
 
-DOCS = {
-    "pairs": ("index", "intersecting face pairs (f < g) of all key frames, concatenated, (P, 2) int64"),
-    "pair_offsets": ("index", "pairs of frame k are pairs[pair_offsets[k]:pair_offsets[k+1]], (K+1,) int64"),
-    "intersecting_faces": ("count", "faces in at least one intersecting pair, per key frame, (K,) int64"),
-    "new_intersecting_faces": ("count", "faces in a pair that does not intersect in the reference, per key frame, (K,) int64"),
-    "contact_vertices": ("count", "near-contact vertices per key frame (0 when contacts are off), (K,) int64"),
-    "mask": ("bool", "V_C: True for vertices that constrain the vector field, (n,) bool"),
-    "reasons": ("flags", "why a vertex left or re-entered V_C: 1 intersection, 2 ring, 4 contact, "
-                         "8 manual, 16 re-added (reference intersection), (n,) uint8"),
-}
-
 
 def build_parser():
-    parser = stage_parser("classify", __doc__)
-    parser.add_argument("--keyframes", required=True, help="keyframes.h5 of the pose")
-    parser.add_argument("--out", required=True, help="classify.h5 to write")
-    add_settings_options(parser, ClassifySettings, "classification (config classify)")
+    parser = stage_parser("classify", __doc__, [(ClassifySettings, "classification (config classify)")],
+                          keyframes="keyframes.h5 of the pose", out="classify.h5 to write")
     parser.add_argument("--exclude", type=int_list, default=[], help="vertex ids to exclude by hand, e.g. 1,2,3")
     parser.add_argument("--exclude-file", default=None, help="text file of vertex ids to exclude by hand")
     return parser
@@ -86,7 +72,7 @@ def main(args, log):
                  "intersecting_faces_reference": int(counts[0]), "intersecting_faces_target": int(counts[-1]),
                  "intersecting_faces_keyframes_max": int(counts.max()),
                  "new_intersecting_faces_keyframes_max": int(new.max())},
-        docs=DOCS)
+        docs=dataset_docs("classify"))
 
 
 def _exclusions(args, n):

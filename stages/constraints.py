@@ -10,28 +10,17 @@ import posefix.workflow.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; r
 
 from posefix.mesh.geometry import bbox_diagonal
 from posefix.io.artifacts import read_artifact, write_artifact
-from posefix.workflow.cli import run_stage, stage_parser
-from posefix.workflow.settings import add_settings_options
+from posefix.workflow.cli import dataset_docs, run_stage, stage_parser
 from posefix.io.errors import InputError
 from posefix.workflow.timings import Timings
 from posefix.spacetime.constraints import spacetime_constraints
 from posefix.workflow.stage_settings import ConstraintsSettings
 
-DOCS = {
-    "points": ("length", "space-time constraint points (c(t_i), tau t_i), (N, 4) float64"),
-    "values": ("length/time", "trajectory tangents c'(t_i) to interpolate, (N, 3) float64"),
-    "vertex": ("index", "vertex of each constraint, (N,) int64"),
-    "time": ("1", "sample time t_i of each constraint, (N,) float64"),
-}
-
 
 def build_parser():
-    parser = stage_parser("constraints", __doc__)
-    parser.add_argument("--keyframes", required=True, help="keyframes.h5 of the pose")
-    parser.add_argument("--classify", required=True, help="classify.h5 of the pose (V_C)")
-    parser.add_argument("--out", required=True, help="constraints.h5 to write")
-    add_settings_options(parser, ConstraintsSettings, "constraints (config constraints)")
-    return parser
+    return stage_parser("constraints", __doc__, [(ConstraintsSettings, "constraints (config constraints)")],
+                        keyframes="keyframes.h5 of the pose", classify="classify.h5 of the pose (V_C)",
+                        out="constraints.h5 to write")
 
 
 def main(args, log):
@@ -55,7 +44,7 @@ def main(args, log):
         inputs=[args.keyframes, args.classify], timings=timings,
         metrics={"constraints": len(points), "constraint_vertices": int(cl["mask"].sum()),
                  "samples": args.samples, "tau": args.tau * d, "bbox_diagonal": d},
-        docs=DOCS)
+        docs=dataset_docs("constraints"))
 
 
 if __name__ == "__main__":

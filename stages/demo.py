@@ -12,17 +12,14 @@ import posefix.workflow.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; r
 from posefix.mesh.intersections import intersecting_faces, self_intersecting_pairs
 from posefix.workflow import demo
 from posefix.workflow.cli import run_stage, stage_parser
-from posefix.workflow.settings import add_settings_options
 from posefix.workflow.stage_settings import DemoSettings
 from posefix.io.meshes import write_mesh
 from posefix.workflow.timings import Timings
 
 
 def build_parser():
-    parser = stage_parser("demo", __doc__)
-    parser.add_argument("--out", required=True, help="folder to write the library into")
-    add_settings_options(parser, DemoSettings, "demo library (config demo)")
-    return parser
+    return stage_parser("demo", __doc__, [(DemoSettings, "demo library (config demo)")],
+                        out="folder to write the library into")
 
 
 def main(args, log):

@@ -17,14 +17,13 @@ from posefix.workflow.timings import Timings
 
 
 def build_parser():
-    parser = stage_parser("export", __doc__)
-    parser.add_argument("--artifact", required=True, help="verify.h5 (space-time) or another repair's artifact of the pose")
+    parser = stage_parser("export", __doc__,
+                          artifact="verify.h5 (space-time) or another repair's artifact of the pose",
+                          reference="the reference mesh file (its seams: vertices split there get one position again)",
+                          target="the target mesh file (its format is reproduced)",
+                          out="repaired mesh file (same extension as --target)")
     parser.add_argument("--stage", default="verify", choices=("verify", "repair_medial", "repair_volumetric", "repair_contact"),
                         help="the stage that wrote --artifact: its dataset 'repaired' is written")
-    parser.add_argument("--reference", required=True,
-                        help="the reference mesh file (its seams: vertices split there get one position again)")
-    parser.add_argument("--target", required=True, help="the target mesh file (its format is reproduced)")
-    parser.add_argument("--out", required=True, help="repaired mesh file (same extension as --target)")
     return parser
 
 

@@ -18,8 +18,7 @@ import numpy as np
 
 from posefix.spacetime import fit_checkpoint as checkpoint
 from posefix.io.artifacts import config_hash, read_artifact, source_file, write_artifact
-from posefix.workflow.cli import run_stage, stage_parser
-from posefix.workflow.settings import add_settings_options
+from posefix.workflow.cli import dataset_docs, run_stage, stage_parser
 from posefix.workflow.stage_settings import FitOptions
 from posefix.io.errors import InputError
 from posefix.io.files import file_sha256
@@ -28,36 +27,11 @@ from posefix.workflow.timings import Timings
 from posefix.spacetime.factorization import FactorizationError
 from posefix.spacetime.fit import FitSettings, cache_fits, fit_memory, iterate
 
-DOCS = {
-    "centers": ("length", "RBF centres gamma_j in space-time, (n, 4) float64"),
-    "center_index": ("index", "constraint index of each centre, in selection order, (n,) int64"),
-    "weights": ("length/time", "kernel weights w_j in normalized coordinates, (n, 3) float64"),
-    "poly": ("length/time", "quadratic polynomial coefficients (1, z_i, z_i z_j) in normalized coordinates, (15, 3) float64"),
-    "shift": ("length", "normalization z = (y - shift) / scale, (4,) float64"),
-    "scale": ("length", "normalization scale, () float64"),
-}
-HISTORY = {
-    "centers": ("count", "centres after each iteration, (I,) int64"),
-    "max_error": ("length/time", "max residual norm after each iteration, (I,) float64"),
-    "rms_error": ("length/time", "rms residual norm after each iteration, (I,) float64"),
-    "condition": ("1", "estimate of kappa_1 of the (n+15) saddle-point system, (I,) float64"),
-    "dropped": ("count", "candidates dropped as near-duplicates of existing centres, (I,) int64"),
-    "seconds_evaluate": ("s", "residual evaluation per iteration, (I,) float64"),
-    "seconds_select": ("s", "candidate and centre selection per iteration, (I,) float64"),
-    "seconds_update": ("s", "kernel columns and factorization update per iteration, (I,) float64"),
-    "seconds_solve": ("s", "solve for weights and polynomial per iteration, (I,) float64"),
-    "seconds_condition": ("s", "condition estimate per iteration, (I,) float64"),
-}
-DOCS = DOCS | {f"history/{k}": v for k, v in HISTORY.items()}
-"""Every dataset of fit.h5: the field's and, under ``history/``, one value per iteration."""
-
 
 def build_parser():
-    parser = stage_parser("fit", __doc__)
-    parser.add_argument("--constraints", required=True, help="constraints.h5 of the pose")
-    parser.add_argument("--out", required=True, help="fit.h5 to write")
+    parser = stage_parser("fit", __doc__, [(FitOptions, "fit (config fit)")],
+                          constraints="constraints.h5 of the pose", out="fit.h5 to write")
     parser.add_argument("--checkpoint", default=None, help="checkpoint folder (default: <out> with .checkpoint)")
-    add_settings_options(parser, FitOptions, "fit (config fit)")
     parser.add_argument("--mem-mb", type=float, default=None, help="the job's memory (MB; the rule's resources)")
     return parser
 
@@ -100,7 +74,8 @@ def main(args, log):
     last = fit.history[-1]
     log.info("stopped (%s) at %d centres: max error %.3g d, rms %.3g d, max kappa %.3g", reason, fit.n,
              last["max_error"] / d, last["rms_error"] / d, max(r["condition"] for r in fit.history))
-    history = {f"history/{k}": np.array([r[k] for r in fit.history]) for k in HISTORY}
+    history = {name: np.array([r[name[len("history/"):]] for r in fit.history]) for name in dataset_docs("fit")
+               if name.startswith("history/")}
     write_artifact(
         args.out, "fit",
         {"centers": points[fit.order], "center_index": fit.order, "weights": fit.weights, "poly": fit.poly,
@@ -116,7 +91,7 @@ def main(args, log):
                  "constraints": len(points), "constraint_vertices": int(attrs["metrics"]["constraint_vertices"]),
                  "resumed_iterations": resumed,
                  "seconds": sum(timings.get(k, 0.0) for k in ("start", "iterate"))},
-        docs=DOCS)
+        docs=dataset_docs("fit"))
     if not args.keep_checkpoint:
         checkpoint.remove(folder)
 

@@ -10,8 +10,7 @@ import posefix.workflow.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; r
 import numpy as np
 
 from posefix.io.artifacts import read_artifact, write_artifact
-from posefix.workflow.cli import run_stage, stage_parser
-from posefix.workflow.settings import add_settings_options
+from posefix.workflow.cli import dataset_docs, run_stage, stage_parser
 from posefix.io.errors import InputError
 from posefix.workflow.resources import opencl_device
 from posefix.workflow.timings import Timings
@@ -19,22 +18,11 @@ from posefix.workflow.stage_settings import IntegrateSettings
 from posefix.spacetime.integration_opencl import path_lines
 from posefix.spacetime.rbf import RBFField
 
-DOCS = {
-    "positions": ("length", "vertex positions at t = 1: the repaired pose before verification, (n, 3) float64"),
-    "samples": ("length", "vertex positions at the sample times, (S, n, 3) float64"),
-    "sample_times": ("1", "sample times t_i = i/s, (S,) float64"),
-    "steps": ("count", "accepted RK45 steps per vertex, (n,) int64"),
-    "rejected": ("count", "rejected RK45 steps per vertex, (n,) int64"),
-}
-
 
 def build_parser():
-    parser = stage_parser("integrate", __doc__)
-    parser.add_argument("--fit", required=True, help="fit.h5 of the pose (the field, tau, sample count)")
-    parser.add_argument("--keyframes", required=True, help="keyframes.h5 of the pose (reference positions)")
-    parser.add_argument("--out", required=True, help="integrate.h5 to write")
-    add_settings_options(parser, IntegrateSettings, "integration (config integrate)")
-    return parser
+    return stage_parser("integrate", __doc__, [(IntegrateSettings, "integration (config integrate)")],
+                        fit="fit.h5 of the pose (the field, tau, sample count)",
+                        keyframes="keyframes.h5 of the pose (reference positions)", out="integrate.h5 to write")
 
 
 def main(args, log):
@@ -69,7 +57,7 @@ def main(args, log):
         metrics={"backend": backend, "device": device_name, "seconds": timings["integrate"],
                  "steps_mean": float(steps.mean()), "steps_max": int(steps.max()),
                  "rejected": int(rejected.sum()), "centers": len(field.weights), "bbox_diagonal": d},
-        docs=DOCS)
+        docs=dataset_docs("integrate"))
 
 
 if __name__ == "__main__":

@@ -12,34 +12,16 @@ import numpy as np
 
 from posefix.mesh.geometry import bbox_diagonal
 from posefix.io.artifacts import write_artifact
-from posefix.workflow.cli import run_stage, stage_parser
-from posefix.workflow.settings import add_settings_options
+from posefix.workflow.cli import dataset_docs, run_stage, stage_parser
 from posefix.io.library import read_welded_pair
 from posefix.workflow.timings import Timings
 from posefix.spacetime import keyframes as kf
 from posefix.workflow.stage_settings import KeyframesSettings
 
-DOCS = {
-    "t": ("1", "key-frame times in [0, 1], (K,) float64"),
-    "frames": ("length", "key-frame vertex positions, (K, n, 3) float64; frames[0] = reference, frames[-1] = target"),
-    "faces": ("index", "triangle vertex indices, (m, 3) int64"),
-    "reference": ("length", "reference vertex positions, (n, 3) float64"),
-    "target": ("length", "target vertex positions, (n, 3) float64"),
-    "weld_index": ("index", "vertex (of the n) of every input vertex: n is less than the input's vertex count when the "
-                            "reference has vertices split along seams, which are welded (N,) int64"),
-    "rotation_angle": ("rad", "per-face rotation angle reference -> aligned target after unwrapping, (m,) float64"),
-    "branch_turns": ("1", "per-face number of full turns added by the branch unwrapping, (m,) int64"),
-    "global_rotation": ("rad", "rotation vector of the removed global rigid rotation, (3,) float64"),
-}
-
 
 def build_parser():
-    parser = stage_parser("keyframes", __doc__)
-    parser.add_argument("--reference", required=True, help="reference mesh file")
-    parser.add_argument("--target", required=True, help="target pose mesh file")
-    parser.add_argument("--out", required=True, help="keyframes.h5 to write")
-    add_settings_options(parser, KeyframesSettings, "key frames (config keyframes)")
-    return parser
+    return stage_parser("keyframes", __doc__, [(KeyframesSettings, "key frames (config keyframes)")],
+                        reference="reference mesh file", target="target pose mesh file", out="keyframes.h5 to write")
 
 
 def main(args, log):
@@ -75,7 +57,7 @@ def main(args, log):
                  "endpoint_error_reference": err0, "endpoint_error_target": err1,
                  "unwrapped_faces": int(np.count_nonzero(interp.turns)),
                  "global_rotation_deg": float(np.degrees(np.linalg.norm(interp.global_omega)))},
-        docs=DOCS)
+        docs=dataset_docs("keyframes"))
 
 
 if __name__ == "__main__":

@@ -19,11 +19,8 @@ from posefix.report.tables import entry_status, summary_html
 
 
 def build_parser():
-    parser = stage_parser("overview", __doc__)
-    parser.add_argument("--summary", required=True, help="summary.json of the library")
-    parser.add_argument("--png", required=True, help="overview.png to write")
-    parser.add_argument("--html", required=True, help="summary.html to write")
-    return parser
+    return stage_parser("overview", __doc__, summary="summary.json of the library", png="overview.png to write",
+                        html="summary.html to write")
 
 
 def main(args, log):

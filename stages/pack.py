@@ -22,12 +22,11 @@ from posefix.workflow.timings import Timings
 
 
 def build_parser():
-    parser = stage_parser("pack", __doc__)
-    parser.add_argument("--container", required=True, help="the input .usd/.usda/.usdc/.usdz or .gltf/.glb file")
+    parser = stage_parser("pack", __doc__, container="the input .usd/.usda/.usdc/.usdz or .gltf/.glb file",
+                          repaired="folder of the repair's meshes, <pose>.ply",
+                          out="the container to write (the input's extension)")
     parser.add_argument("--mesh", default=None, help="its mesh holding the poses (USD prim path, glTF mesh name)")
-    parser.add_argument("--repaired", required=True, help="folder of the repair's meshes, <pose>.ply")
     parser.add_argument("--poses", default="", help="comma-separated names of the repaired poses to write")
-    parser.add_argument("--out", required=True, help="the container to write (the input's extension)")
     return parser
 
 

@@ -16,9 +16,8 @@ import posefix.workflow.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; r
 
 from posefix.mesh.distortion import distorted_faces
 from posefix.mesh.intersections import intersecting_faces, self_intersecting_pairs
-from posefix.io.artifacts import read_artifact, read_repair
-from posefix.workflow.cli import named_path, run_stage, stage_parser
-from posefix.workflow.settings import add_settings_options
+from posefix.io.artifacts import read_artifact, repaired_poses
+from posefix.workflow.cli import add_repair_option, run_stage, stage_parser
 from posefix.workflow.stage_settings import SummarySettings
 from posefix.io.files import write_figure
 from posefix.workflow.timings import Timings, benchmark_seconds
@@ -31,18 +30,14 @@ HISTORY = ("centers", "max_error", "rms_error", "condition", "seconds_evaluate",
 
 
 def build_parser():
-    parser = stage_parser("render", __doc__)
-    parser.add_argument("--keyframes", required=True, help="keyframes.h5 of the pose (reference, target, faces)")
-    parser.add_argument("--classify", required=True, help="classify.h5 of the pose (V_C, pairs per key frame)")
-    parser.add_argument("--fit", required=True, help="fit.h5 of the pose (history)")
-    parser.add_argument("--verify", required=True, help="verify.h5 of the pose (repaired pose, deviation)")
-    parser.add_argument("--benchmarks", required=True, help="folder of the pose's Snakemake benchmark files")
-    parser.add_argument("--pose", required=True, help="pose name (figure titles)")
-    parser.add_argument("--out", required=True, help="folder to write the PNG files into")
-    parser.add_argument("--repair", type=named_path, action="append", default=[], metavar="NAME=PATH",
-                        help="another repair's artifact (e.g. medial=<pose>/medial.h5), drawn beside the repaired "
-                        "pose in renders.png; repeatable")
-    add_settings_options(parser, SummarySettings, "distortion (config summary)")
+    parser = stage_parser("render", __doc__, [(SummarySettings, "distortion (config summary)")],
+                          keyframes="keyframes.h5 of the pose (reference, target, faces)",
+                          classify="classify.h5 of the pose (V_C, pairs per key frame)",
+                          fit="fit.h5 of the pose (history)",
+                          verify="verify.h5 of the pose (repaired pose, deviation)",
+                          benchmarks="folder of the pose's Snakemake benchmark files",
+                          pose="pose name (figure titles)", out="folder to write the PNG files into")
+    add_repair_option(parser, "draw it beside the repaired pose in renders.png")
     return parser
 
 
@@ -53,7 +48,7 @@ def main(args, log):
         cl, _ = read_artifact(args.classify, "classify", ["mask", "pairs", "pair_offsets", "intersecting_faces"])
         fi, fattrs = read_artifact(args.fit, "fit", [f"history/{k}" for k in HISTORY])
         ve, _ = read_artifact(args.verify, "verify", ["repaired", "deviation", "replaced", "pairs", "new_faces"])
-        compared = {name: read_repair(path, name, ["repaired"])[0]["repaired"] for name, path in args.repair}
+        compared = repaired_poses(args.repair)
     V_ref, V_tgt, F = kf["reference"], kf["target"], kf["faces"]
     m = len(F)
     frame_pairs = split_frames(cl["pairs"], cl["pair_offsets"])

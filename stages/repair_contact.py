@@ -16,27 +16,16 @@ from posefix.mesh.contact_solver import ContactSettings, ContactSolver
 from posefix.mesh.geometry import unit_scale
 from posefix.mesh.intersections import intersecting_faces
 from posefix.io.artifacts import read_artifact, write_artifact
-from posefix.workflow.cli import run_stage, stage_parser
+from posefix.workflow.cli import dataset_docs, run_stage, stage_parser
 from posefix.workflow.settings import add_settings_options, settings_from
 from posefix.workflow.timings import Timings
 from posefix.spacetime.classification import split_frames
 
-DOCS = {
-    "start": ("length", "the target pose (the last key frame, exactly), (n, 3) float64"),
-    "repaired": ("length", "the repaired pose: the reference carried through the key frames, (n, 3) float64"),
-    "contact": ("bool", "vertices the barrier holds off the target (closer than dhat to a part they do not touch "
-                        "in the reference), (n,) bool"),
-    "new_faces": ("bool", "faces intersecting in the repaired pose but not in the reference, (m,) bool"),
-}
-
 
 def build_parser():
-    parser = stage_parser("repair_contact", __doc__)
-    parser.add_argument("--keyframes", required=True, help="keyframes.h5 of the pose (frames, faces)")
-    parser.add_argument("--classify", required=True, help="classify.h5 of the pose (the reference's intersections)")
-    parser.add_argument("--out", required=True, help="contact.h5 to write")
-    add_settings_options(parser, ContactSettings, "contact solver (config contact)")
-    return parser
+    return stage_parser("repair_contact", __doc__, [(ContactSettings, "contact solver (config contact)")],
+                        keyframes="keyframes.h5 of the pose (frames, faces)",
+                        classify="classify.h5 of the pose (the reference's intersections)", out="contact.h5 to write")
 
 
 def main(args, log):
@@ -61,7 +50,7 @@ def main(args, log):
     write_artifact(args.out, "repair_contact",
                    {"start": frames[-1], "repaired": result.X / unit, "contact": result.contact,
                     "new_faces": result.new_faces},
-                   params=params, inputs=[args.keyframes, args.classify], timings=timings, metrics=metrics, docs=DOCS)
+                   params=params, inputs=[args.keyframes, args.classify], timings=timings, metrics=metrics, docs=dataset_docs("repair_contact"))
 
 
 if __name__ == "__main__":

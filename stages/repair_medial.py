@@ -9,33 +9,18 @@ import posefix.workflow.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; r
 
 from posefix.mesh.geometry import bbox_diagonal
 from posefix.io.artifacts import read_artifact, write_artifact
-from posefix.workflow.cli import run_stage, stage_parser
-from posefix.workflow.settings import add_settings_options
+from posefix.workflow.cli import dataset_docs, run_stage, stage_parser
 from posefix.io.errors import InputError
 from posefix.io.library import read_welded_pair
 from posefix.workflow.timings import Timings
 from posefix.medial.repair import MedialRepair
 from posefix.workflow.stage_settings import MedialRepairSettings
 
-DOCS = {
-    "start": ("length", "the target pose, (n, 3) float64"),
-    "repaired": ("length", "the medial-repaired pose, (n, 3) float64"),
-    "intersecting": ("faces", "new intersecting faces (not intersecting in the reference) before every flow iteration (0: the rebuilt start) and after the last, (k+1,) int64"),
-    "error": ("length", "the flow's error sum_i |f(x_i)| (S1 §4) at the same moments, (k+1,) float64"),
-    "step_seconds": ("s", "seconds of each flow step, (k,) float64"),
-    "skeleton": ("length", "the deformed skeletal mesh (ball centres; radii are the reference's), (n, 3) float64"),
-    "free": ("bool", "the damaged region rebuilt on the carried balls, (n,) bool"),
-}
-
 
 def build_parser():
-    parser = stage_parser("repair_medial", __doc__)
-    parser.add_argument("--reference", required=True, help="reference mesh file")
-    parser.add_argument("--target", required=True, help="target pose file")
-    parser.add_argument("--skeleton", required=True, help="skeleton.h5 of the reference")
-    parser.add_argument("--out", required=True, help="medial.h5 to write")
-    add_settings_options(parser, MedialRepairSettings, "medial repair (config medial.repair)")
-    return parser
+    return stage_parser("repair_medial", __doc__, [(MedialRepairSettings, "medial repair (config medial.repair)")],
+                        reference="reference mesh file", target="target pose file",
+                        skeleton="skeleton.h5 of the reference", out="medial.h5 to write")
 
 
 def main(args, log):
@@ -67,7 +52,7 @@ def main(args, log):
                "intersecting_faces_repaired_new": final}
     params = {k: v for k, v in vars(args).items() if k not in ("log", "out", "threads")}
     write_artifact(args.out, "repair_medial", datasets, params=params,
-                   inputs=[args.reference, args.target, args.skeleton], timings=timings, metrics=metrics, docs=DOCS)
+                   inputs=[args.reference, args.target, args.skeleton], timings=timings, metrics=metrics, docs=dataset_docs("repair_medial"))
 
 
 if __name__ == "__main__":

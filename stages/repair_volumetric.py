@@ -10,32 +10,20 @@ too do not count). See ``posefix.volumetric.repair``.
 import posefix.workflow.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; runtime defaults before numpy)
 
 from posefix.io.artifacts import read_artifact, write_artifact
-from posefix.workflow.cli import run_stage, stage_parser
-from posefix.workflow.settings import add_settings_options
+from posefix.workflow.cli import dataset_docs, run_stage, stage_parser
 from posefix.io.errors import InputError
 from posefix.io.library import read_welded_pair
 from posefix.workflow.timings import Timings
 from posefix.volumetric.repair import VolumetricRepair
 from posefix.workflow.stage_settings import VolumetricRepairSettings
 
-DOCS = {
-    "start": ("length", "the target pose, (n, 3) float64"),
-    "repaired": ("length", "the filled pose: the target on the kept vertices, (n, 3) float64"),
-    "free": ("bool", "the vertices filled: not V_C, grown by 'rings' rings, (n,) bool"),
-    "tets": ("length", "the posed tet-mesh vertices, (k, 3) float64"),
-    "shear": ("ratio", "volume-weighted mean |T_j - R_j| of the tets after every solve, (iterations+1,) float64"),
-}
-
 
 def build_parser():
-    parser = stage_parser("repair_volumetric", __doc__)
-    parser.add_argument("--reference", required=True, help="reference mesh file")
-    parser.add_argument("--target", required=True, help="target pose file")
-    parser.add_argument("--classify", required=True, help="classify.h5 of the pose (its mask is V_C)")
-    parser.add_argument("--tets", required=True, help="tets.h5 of the reference (stage tet_mesh)")
-    parser.add_argument("--out", required=True, help="volumetric.h5 to write")
-    add_settings_options(parser, VolumetricRepairSettings, "volumetric repair (config volumetric.repair)")
-    return parser
+    return stage_parser("repair_volumetric", __doc__,
+                        [(VolumetricRepairSettings, "volumetric repair (config volumetric.repair)")],
+                        reference="reference mesh file", target="target pose file",
+                        classify="classify.h5 of the pose (its mask is V_C)",
+                        tets="tets.h5 of the reference (stage tet_mesh)", out="volumetric.h5 to write")
 
 
 def main(args, log):
@@ -69,7 +57,7 @@ def main(args, log):
     params = {k: v for k, v in vars(args).items() if k not in ("log", "out", "threads")}
     write_artifact(args.out, "repair_volumetric", datasets, params=params,
                    inputs=[args.reference, args.target, args.classify, args.tets], timings=timings,
-                   metrics=metrics, docs=DOCS)
+                   metrics=metrics, docs=dataset_docs("repair_volumetric"))
 
 
 if __name__ == "__main__":

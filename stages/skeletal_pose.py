@@ -18,8 +18,7 @@ import numpy as np
 from posefix.mesh.geometry import bbox_diagonal
 from posefix.mesh.intersections import intersecting_faces, self_intersecting_pairs
 from posefix.io.artifacts import write_artifact
-from posefix.workflow.cli import run_stage, stage_parser
-from posefix.workflow.settings import add_settings_options
+from posefix.workflow.cli import authoring_parser, dataset_docs, run_stage
 from posefix.workflow.stage_settings import SkeletalPoseSettings
 from posefix.io.library import read_reference
 from posefix.io.meshes import mesh_file, write_like
@@ -28,32 +27,12 @@ from posefix.workflow.skeleton_options import add_skeleton_options, reference_sk
 from posefix.workflow.timings import Timings
 from posefix.medial.authoring import VARIANTS, SkeletalPoser, union_error
 
-DOCS = {
-    "skeleton/S": ("length", "skeletal mesh vertices (medial-ball centres), (n, 3) float64"),
-    "skeleton/R": ("length", "medial-ball radii |x - s|, (n,) float64"),
-    "skeleton/source": ("label", "which method gave each centre (see the stage log), (n,) int8"),
-    "skeleton/bad": ("bool", "centres still outside the surface or crossing it, (n,) bool"),
-    "poses": ("name", "rig poses, in file order, (P,) str"),
-    "variants": ("name", "ssd, variational, flow, (3,) str"),
-    "intersecting": ("faces", "intersecting faces per pose and variant (ssd, variational, flow), (P, 3) int64"),
-    "error": ("length", "the flow's error sum_i |f(x_i)| (S1 §4) over the deformed balls, per pose and variant, (P, 3) float64"),
-    "seconds": ("s", "wall seconds per pose and variant (flow: without its reconstruction), (P, 3) float64"),
-    "flow/<pose>/intersecting": ("faces", "intersecting faces before each flow iteration and after the last, "
-                                          "(k + 1,) int64"),
-    "flow/<pose>/error": ("length", "sum_i |f(x_i)| by Eq. 10's nearest balls at the same moments, (k + 1,) float64"),
-    "flow/<pose>/step_seconds": ("s", "seconds of each flow step (without the intersection test), (k,) float64"),
-}
-
 
 def build_parser():
-    parser = stage_parser("skeletal_pose", __doc__)
-    parser.add_argument("--mesh", required=True, help="reference mesh (.obj/.ply/.off, optionally .gz)")
-    parser.add_argument("--rig", required=True, help="rig file (YAML: joints and poses, see examples/demo-limb.yaml)")
-    parser.add_argument("--out", required=True, help="folder of the authored pose library")
-    parser.add_argument("--artifact", required=True, help="HDF5 file of the skeletal mesh and the metrics")
-    parser.add_argument("--name", default=None, help="library name: files <name>-reference.*; default the rig's")
+    parser = authoring_parser("skeletal_pose", __doc__, [(SkeletalPoseSettings, "authoring (config medial.pose)")],
+                              ("rig", "rig file (YAML: joints and poses, see examples/demo-limb.yaml)"),
+                              "the skeletal mesh and the metrics")
     add_skeleton_options(parser)
-    add_settings_options(parser, SkeletalPoseSettings, "authoring (config medial.pose)")
     return parser
 
 
@@ -116,7 +95,7 @@ def _write_artifact(args, skeleton, poses, rows, timings):
     params = {k: v for k, v in vars(args).items() if k not in ("log", "artifact", "threads")}
     metrics = {f"skeleton_{k}": v for k, v in skeleton.stats.items() if np.isscalar(v)}
     write_artifact(args.artifact, "skeletal_pose", datasets, params=params, inputs=[args.mesh, args.rig],
-                   timings=timings, metrics=metrics, docs=DOCS)
+                   timings=timings, metrics=metrics, docs=dataset_docs("skeletal_pose"))
 
 
 if __name__ == "__main__":

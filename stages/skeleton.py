@@ -9,23 +9,15 @@ import posefix.workflow.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; r
 import numpy as np
 
 from posefix.io.artifacts import write_artifact
-from posefix.workflow.cli import run_stage, stage_parser
+from posefix.workflow.cli import dataset_docs, run_stage, stage_parser
 from posefix.io.library import read_welded_reference
 from posefix.workflow.skeleton_options import add_skeleton_options, reference_skeleton
 from posefix.workflow.timings import Timings
 
-DOCS = {
-    "S": ("length", "skeletal mesh vertices (medial-ball centres), (n, 3) float64"),
-    "R": ("length", "medial-ball radii |x - s|, (n,) float64"),
-    "source": ("label", "which method gave each centre (see the stage log), (n,) int8"),
-    "bad": ("bool", "centres still outside the surface or crossing it, (n,) bool"),
-}
-
 
 def build_parser():
-    parser = stage_parser("skeleton", __doc__)
-    parser.add_argument("--reference", required=True, help="reference mesh (.obj/.ply/.off, optionally .gz)")
-    parser.add_argument("--out", required=True, help="skeleton.h5 to write")
+    parser = stage_parser("skeleton", __doc__, reference="reference mesh (.obj/.ply/.off, optionally .gz)",
+                          out="skeleton.h5 to write")
     add_skeleton_options(parser)
     return parser
 
@@ -42,7 +34,7 @@ def main(args, log):
     params = {k: v for k, v in vars(args).items() if k not in ("log", "out", "threads")}
     metrics = {k: v for k, v in skeleton.stats.items() if np.isscalar(v)}
     write_artifact(args.out, "skeleton", datasets, params=params, inputs=[args.reference], timings=timings,
-                   metrics=metrics, docs=DOCS)
+                   metrics=metrics, docs=dataset_docs("skeleton"))
 
 
 if __name__ == "__main__":

@@ -18,7 +18,6 @@ import posefix.workflow.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; r
 from posefix.io.artifacts import metrics_carried, read_artifact, read_repair
 from posefix.mesh.distortion import distortion_summary
 from posefix.workflow.cli import named_path, run_stage, stage_parser
-from posefix.workflow.settings import add_settings_options
 from posefix.workflow.stage_settings import SummarySettings
 from posefix.io.errors import InputError
 from posefix.io.files import atomic_write_bytes
@@ -30,16 +29,13 @@ METRICS = ("keyframes", "fit", "verify")
 
 
 def build_parser():
-    parser = stage_parser("summary", __doc__)
-    parser.add_argument("--results", required=True, help="results/<library> folder")
-    parser.add_argument("--poses", required=True, help="comma-separated pose names")
-    parser.add_argument("--out", required=True, help="summary.json to write")
-    parser.add_argument("--markdown", required=True, help="summary.md to write")
+    parser = stage_parser("summary", __doc__, [(SummarySettings, "summary (config summary)")],
+                          results="results/<library> folder", poses="comma-separated pose names",
+                          out="summary.json to write", markdown="summary.md to write")
     parser.add_argument("--repairs", default="",
                         help="comma-separated other repairs to compare (their <pose>/<name>.h5), e.g. medial")
     parser.add_argument("--failed", type=named_path, action="append", default=[], metavar="POSE=ERROR",
                         help="a pose that did not finish and its error line (listed apart; the run failed)")
-    add_settings_options(parser, SummarySettings, "summary (config summary)")
     return parser
 
 

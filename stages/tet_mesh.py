@@ -8,26 +8,17 @@ target pose.
 import posefix.workflow.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; runtime defaults before numpy)
 
 from posefix.io.artifacts import write_artifact
-from posefix.workflow.cli import run_stage, stage_parser
-from posefix.workflow.settings import add_settings_options
+from posefix.workflow.cli import dataset_docs, run_stage, stage_parser
 from posefix.io.errors import InputError
 from posefix.io.library import read_welded_reference
 from posefix.workflow.timings import Timings
 from posefix.volumetric.tet_mesh import tet_mesh
 from posefix.workflow.stage_settings import TetMeshSettings
 
-DOCS = {
-    "X": ("length", "tet-mesh vertices at rest, (k, 3) float64"),
-    "T": ("index", "tets (positively oriented, one connected set), (t, 4) int64"),
-}
-
 
 def build_parser():
-    parser = stage_parser("tet_mesh", __doc__)
-    parser.add_argument("--reference", required=True, help="reference mesh (.obj/.ply/.off, optionally .gz)")
-    parser.add_argument("--out", required=True, help="tets.h5 to write")
-    add_settings_options(parser, TetMeshSettings, "tet mesh (config volumetric.repair)")
-    return parser
+    return stage_parser("tet_mesh", __doc__, [(TetMeshSettings, "tet mesh (config volumetric.repair)")],
+                        reference="reference mesh (.obj/.ply/.off, optionally .gz)", out="tets.h5 to write")
 
 
 def main(args, log):
@@ -41,7 +32,7 @@ def main(args, log):
     log.info("%s: %d vertices; tet mesh of %d vertices, %d tets", args.reference, len(V), len(X), len(T))
     params = {k: v for k, v in vars(args).items() if k not in ("log", "out", "threads")}
     write_artifact(args.out, "tet_mesh", {"X": X, "T": T}, params=params, inputs=[args.reference],
-                   timings=timings, metrics={"tet_vertices": len(X), "tets": len(T)}, docs=DOCS)
+                   timings=timings, metrics={"tet_vertices": len(X), "tets": len(T)}, docs=dataset_docs("tet_mesh"))
 
 
 if __name__ == "__main__":

@@ -15,13 +15,12 @@ from posefix.workflow.timings import Timings
 
 
 def build_parser():
-    parser = stage_parser("unpack", __doc__)
-    parser.add_argument("--container", required=True, help="the .usd/.usda/.usdc/.usdz or .gltf/.glb file")
+    parser = stage_parser("unpack", __doc__, container="the .usd/.usda/.usdc/.usdz or .gltf/.glb file",
+                          pose="the pose's name (posefix.io.containers: frame, shape, target)",
+                          out="the mesh file to write (.ply)")
     parser.add_argument("--mesh", default=None, help="its mesh holding the poses (USD prim path, glTF mesh name); "
                                                      "default: the only one")
-    parser.add_argument("--pose", required=True, help="the pose's name (posefix.io.containers: frame, shape, target)")
     parser.add_argument("--reference", action="store_true", help="the pose is the reference: check it as one")
-    parser.add_argument("--out", required=True, help="the mesh file to write (.ply)")
     return parser
 
 

@@ -17,30 +17,20 @@ import numpy as np
 from posefix.mesh.geometry import bbox_diagonal
 from posefix.mesh.intersections import intersecting_faces, self_intersecting_pairs
 from posefix.io.artifacts import write_artifact
-from posefix.workflow.cli import run_stage, stage_parser
+from posefix.workflow.cli import dataset_docs, run_stage, stage_parser
 from posefix.io.files import file_sha256
 from posefix.mesh.weld import Weld
 from posefix.io.library import check_seams, discover_library, find_reference, read_pose, read_reference
 from posefix.workflow.timings import Timings
 
-DOCS = {
-    "reference/vertices": ("length", "reference vertex positions, (n, 3) float64"),
-    "faces": ("index", "triangle vertex indices shared by all poses, (m, 3) int64, 0-based"),
-    "poses/name": ("", "pose names, (p,) UTF-8 str, the reference first"),
-    "poses/path": ("", "mesh file paths as given, (p,) UTF-8 str"),
-    "poses/format": ("", "file format with compression suffix, e.g. '.obj.gz', (p,) UTF-8 str"),
-    "poses/sha256": ("", "sha256 of each file's bytes, (p,) UTF-8 str"),
-}
-
 
 def build_parser():
-    parser = stage_parser("validate", __doc__)
-    parser.add_argument("--library", required=True, help="folder of the pose library")
+    parser = stage_parser("validate", __doc__, library="folder of the pose library",
+                          out="the artifact to write (reference.h5, <pose>/validate.h5)")
     parser.add_argument("--reference", default=None, help="reference file or pose name")
     parser.add_argument("--poses", default=None, help="comma-separated pose names (default: all)")
     parser.add_argument("--name", default=None, help="library name (default: folder name)")
     parser.add_argument("--reference-only", action="store_true", help="read and check the reference alone")
-    parser.add_argument("--out", required=True, help="the artifact to write (reference.h5, <pose>/validate.h5)")
     return parser
 
 
@@ -80,7 +70,7 @@ def main(args, log):
         metrics={"vertices": len(V_ref), "split_vertices": len(weld.index) - len(weld.kept), "faces": len(F),
                  "poses": len(checked), "reference_intersecting_faces": own,
                  "bbox_diagonal": bbox_diagonal(V_ref)},
-        docs=DOCS)
+        docs=dataset_docs("validate"))
 
 
 def _own_intersections(path, V, F, log):

@@ -18,8 +18,7 @@ import posefix.workflow.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; r
 from posefix.mesh.contact_solver import ContactSettings
 from posefix.mesh.geometry import unit_scale
 from posefix.io.artifacts import carried_metrics, read_artifact, write_artifact
-from posefix.workflow.cli import run_stage, stage_parser
-from posefix.workflow.settings import add_settings_options
+from posefix.workflow.cli import dataset_docs, run_stage, stage_parser
 from posefix.workflow.timings import Timings
 from posefix.verify.contact_finish import FinishSettings
 from posefix.verify.flags import describe_flags
@@ -27,28 +26,15 @@ from posefix.verify.sequence import RepairSettings, finish_settings, finished_po
 from posefix.verify.state import RepairProblem
 from posefix.spacetime.classification import split_frames
 
-DOCS = {
-    "integrated_deviation": ("1", "|integrated - target| / bbox diagonal per vertex, before reproduction and "
-                                  "fallback, (n,) float64"),
-    "repaired": ("length", "repaired vertex positions (after the fallback), (n, 3) float64"),
-    "deviation": ("1", "|repaired - target| / bbox diagonal per vertex, (n,) float64"),
-    "replaced": ("flags", f"what the repair did per vertex: {describe_flags()}, (n,) uint8"),
-    "new_faces": ("bool", "faces intersecting in the repaired pose but not in the reference, (m,) bool"),
-    "pairs": ("index", "intersecting face pairs (f < g) of the repaired pose, (P, 2) int64"),
-}
-
 
 def build_parser():
-    parser = stage_parser("verify", __doc__)
-    parser.add_argument("--keyframes", required=True, help="keyframes.h5 of the pose (reference, target, faces)")
-    parser.add_argument("--classify", required=True, help="classify.h5 of the pose (V_C, reference intersections)")
-    parser.add_argument("--integrate", required=True, help="integrate.h5 of the pose")
-    parser.add_argument("--fit", required=True, help="fit.h5 of the pose (eps)")
-    parser.add_argument("--out", required=True, help="verify.h5 to write")
-    add_settings_options(parser, RepairSettings, "finish (config verify)")
-    add_settings_options(parser, FinishSettings, "contact finish (config verify)")
-    add_settings_options(parser, ContactSettings, "contact solver (config contact)")
-    return parser
+    settings = [(RepairSettings, "finish (config verify)"), (FinishSettings, "contact finish (config verify)"),
+                (ContactSettings, "contact solver (config contact)")]
+    return stage_parser("verify", __doc__, settings,
+                        keyframes="keyframes.h5 of the pose (reference, target, faces)",
+                        classify="classify.h5 of the pose (V_C, reference intersections)",
+                        integrate="integrate.h5 of the pose", fit="fit.h5 of the pose (eps)",
+                        out="verify.h5 to write")
 
 
 def main(args, log):
@@ -71,7 +57,7 @@ def main(args, log):
          "replaced": result.replaced, "new_faces": result.new, "pairs": result.pairs},
         params=params,
         inputs=[args.keyframes, args.classify, args.integrate, args.fit], timings=timings,
-        metrics=result.metrics | carried_metrics(iattrs["metrics"], "integrate"), docs=DOCS)
+        metrics=result.metrics | carried_metrics(iattrs["metrics"], "integrate"), docs=dataset_docs("verify"))
 
 
 def _say_what_was_left(target, metrics, log):

@@ -33,11 +33,8 @@ DISTORTION_LIMIT = library_defaults(distortion_summary)["limit"]
 
 
 def build_parser():
-    parser = stage_parser("viewer", __doc__)
-    parser.add_argument("--summary", required=True, help="summary.json of the library (its poses and repairs)")
-    parser.add_argument("--results", required=True, help="results/<library> folder (<pose>/*.h5)")
-    parser.add_argument("--out", required=True, help="viewer.html to write")
-    return parser
+    return stage_parser("viewer", __doc__, summary="summary.json of the library (its poses and repairs)",
+                        results="results/<library> folder (<pose>/*.h5)", out="viewer.html to write")
 
 
 def read_summary(path):

@@ -18,8 +18,7 @@ import numpy as np
 from posefix.mesh.distance import surface_distance_below
 from posefix.mesh.geometry import bbox_diagonal
 from posefix.io.artifacts import write_artifact
-from posefix.workflow.cli import run_stage, stage_parser
-from posefix.workflow.settings import add_settings_options
+from posefix.workflow.cli import authoring_parser, dataset_docs, run_stage
 from posefix.workflow.stage_settings import TetMeshSettings, VolumetricAnimateSettings
 from posefix.io.errors import InputError
 from posefix.io.library import read_reference
@@ -30,18 +29,6 @@ from posefix.volumetric.authoring import region_tets
 from posefix.volumetric.markers import MarkerAnimator
 from posefix.volumetric.tet_mesh import tet_mesh
 
-DOCS = {
-    "tets/X": ("length", "tet-mesh vertices at rest, (k, 3) float64"),
-    "tets/T": ("index", "tets (positively oriented), (t, 4) int64"),
-    "markers": ("length", "rest positions of the markers (their point handles), (p, 3) float64"),
-    "labels": ("name", "marker labels, as in the tracks, (p,) str"),
-    "offsets": ("length", "distance of every marker's rest position from the reference surface, (p,) float64"),
-    "frames": ("index", "frame numbers of the tracks, ascending, (f,) int64"),
-    "residuals": ("length", "distance of every marker's place on the animated surface from its captured "
-                            "position, per frame, (f, p) float64"),
-    "shear": ("ratio", "volume-weighted mean |T_j - R_j| of the tets after every frame, (f,) float64"),
-    "seconds": ("s", "wall seconds per frame (solves and transfer), (f,) float64"),
-}
 
 
 def named_box(text):
@@ -57,15 +44,11 @@ def named_box(text):
 
 
 def build_parser():
-    parser = stage_parser("volumetric_animate", __doc__)
-    parser.add_argument("--mesh", required=True, help="reference mesh (.obj/.ply/.off, optionally .gz)")
-    parser.add_argument("--tracks", required=True, help="marker tracks: .csv (frame, marker, x, y, z) or .npz")
-    parser.add_argument("--out", required=True, help="folder of the animated pose library")
-    parser.add_argument("--artifact", required=True, help="HDF5 file of the tet mesh, markers and residuals")
-    parser.add_argument("--name", default=None, help="library name: files <name>-reference.*, <name>-<frame>.*; "
-                                                     "default the tracks file's")
-    add_settings_options(parser, TetMeshSettings, "tet mesh (config volumetric.animate)")
-    add_settings_options(parser, VolumetricAnimateSettings, "animation (config volumetric.animate)")
+    settings = [(TetMeshSettings, "tet mesh (config volumetric.animate)"),
+                (VolumetricAnimateSettings, "animation (config volumetric.animate)")]
+    parser = authoring_parser("volumetric_animate", __doc__, settings,
+                              ("tracks", "marker tracks: .csv (frame, marker, x, y, z) or .npz"),
+                              "the tet mesh, markers and residuals")
     parser.add_argument("--rigid", type=named_box, action="append", default=[], metavar="NAME=x0,y0,z0,x1,y1,z1",
                         help="a rigid region: the tets wholly inside the box (repeatable)")
     return parser
@@ -138,7 +121,7 @@ def main(args, log):
     params = {k: (v if k != "rigid" else [[n, b.tolist()] for n, b in v]) for k, v in vars(args).items()
               if k not in ("log", "artifact", "threads")}
     write_artifact(args.artifact, "volumetric_animate", datasets, params=params, inputs=[args.mesh, args.tracks],
-                   timings=timings, metrics=metrics, docs=DOCS)
+                   timings=timings, metrics=metrics, docs=dataset_docs("volumetric_animate"))
 
 
 if __name__ == "__main__":

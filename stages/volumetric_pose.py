@@ -15,8 +15,7 @@ import posefix.workflow.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; r
 import numpy as np
 
 from posefix.io.artifacts import write_artifact
-from posefix.workflow.cli import run_stage, stage_parser
-from posefix.workflow.settings import add_settings_options
+from posefix.workflow.cli import authoring_parser, dataset_docs, run_stage
 from posefix.workflow.stage_settings import TetMeshSettings, VolumetricPoseSettings
 from posefix.io.errors import InputError
 from posefix.io.library import read_reference
@@ -26,26 +25,12 @@ from posefix.workflow.timings import Timings
 from posefix.volumetric.authoring import VolumetricPoser, region_tets
 from posefix.volumetric.tet_mesh import tet_mesh
 
-DOCS = {
-    "tets/X": ("length", "tet-mesh vertices at rest, (k, 3) float64"),
-    "tets/T": ("index", "tets (positively oriented), (t, 4) int64"),
-    "poses": ("name", "the script's poses, in file order, (P,) str"),
-    "posed": ("length", "tet-mesh vertices per pose, (P, k, 3) float64"),
-    "shear": ("ratio", "volume-weighted mean |T_j - R_j| of the tets after the last frame's iterations, (P,) float64"),
-    "seconds": ("s", "wall seconds per pose (all frames, and the surface transfer), (P,) float64"),
-}
-
 
 def build_parser():
-    parser = stage_parser("volumetric_pose", __doc__)
-    parser.add_argument("--mesh", required=True, help="reference mesh (.obj/.ply/.off, optionally .gz)")
-    parser.add_argument("--script", required=True, help="pose script (YAML: handles, rigid, poses)")
-    parser.add_argument("--out", required=True, help="folder of the authored pose library")
-    parser.add_argument("--artifact", required=True, help="HDF5 file of the tet mesh and the metrics")
-    parser.add_argument("--name", default=None, help="library name: files <name>-reference.*; default the script's")
-    add_settings_options(parser, TetMeshSettings, "tet mesh (config volumetric.pose)")
-    add_settings_options(parser, VolumetricPoseSettings, "authoring (config volumetric.pose)")
-    return parser
+    settings = [(TetMeshSettings, "tet mesh (config volumetric.pose)"),
+                (VolumetricPoseSettings, "authoring (config volumetric.pose)")]
+    return authoring_parser("volumetric_pose", __doc__, settings,
+                            ("script", "pose script (YAML: handles, rigid, poses)"), "the tet mesh and the metrics")
 
 
 def _handles(path, script, V, X, T):
@@ -101,7 +86,7 @@ def main(args, log):
                     "seconds": np.array([a.seconds for a in authored.values()])}
         params = {k: v for k, v in vars(args).items() if k not in ("log", "artifact", "threads")}
         write_artifact(args.artifact, "volumetric_pose", datasets, params=params, inputs=[args.mesh, args.script],
-                       timings=timings, metrics={"tet_vertices": len(X), "tets": len(T)}, docs=DOCS)
+                       timings=timings, metrics={"tet_vertices": len(X), "tets": len(T)}, docs=dataset_docs("volumetric_pose"))
 
 
 if __name__ == "__main__":

@@ -1,27 +1,21 @@
-"""The dataset tables of ``docs/artifacts.md``, written from the stages' ``DOCS`` (units and description of every
-dataset, which ``write_artifact`` also stores as the dataset's attributes), so that each dataset is described once:
+"""The dataset tables of ``docs/artifacts.md``, written from ``schemas/artifacts.yaml`` (units and description of every
+dataset, which the stages also store as the datasets' attributes), so that each dataset is described once:
 ``python tests/artifact_docs.py`` rewrites them in place; ``tests/test_stages.py`` checks that they are current. The
 prose around them (what the stage does, its metrics and timings) is written by hand."""
 
-import importlib.util
 import re
-import sys
 from pathlib import Path
+
+import yaml
 
 ROOT = Path(__file__).resolve().parents[1]
 HEADER = ["| dataset | units | content |", "|---|---|---|"]
 
 
 def stage_docs():
-    """``{stage: DOCS}`` of the stages that write datasets (their scripts' ``DOCS``)."""
-    out = {}
-    for path in sorted((ROOT / "stages").glob("*.py")):
-        spec = importlib.util.spec_from_file_location(f"stage_{path.stem}", path)
-        module = importlib.util.module_from_spec(spec)
-        spec.loader.exec_module(module)
-        if hasattr(module, "DOCS"):
-            out[path.stem] = module.DOCS
-    return out
+    """``{stage: {dataset: (units, description)}}`` of the stages that write datasets (``schemas/artifacts.yaml``)."""
+    schema = yaml.safe_load((ROOT / "schemas" / "artifacts.yaml").read_text())
+    return {stage: {name: tuple(doc) for name, doc in docs.items()} for stage, docs in schema.items()}
 
 
 def table(docs):
@@ -43,6 +37,5 @@ def with_tables(text, docs):
 
 
 if __name__ == "__main__":
-    sys.path.insert(0, str(ROOT / "lib"))
     page = ROOT / "docs" / "artifacts.md"
     page.write_text(with_tables(page.read_text(), stage_docs()))

@@ -17,8 +17,8 @@ STAGES = ["demo", "validate", "keyframes", "classify", "constraints", "fit", "in
           "volumetric_pose", "tet_mesh", "repair_volumetric", "volumetric_animate", "viewer", "unpack", "pack"]
 
 
-def test_the_dataset_tables_of_the_artifacts_page_are_the_stages_docs():
-    """Each dataset is described once, in its stage's DOCS (also stored as the dataset's attributes)."""
+def test_the_dataset_tables_of_the_artifacts_page_are_the_artifact_schema():
+    """Each dataset is described once, in schemas/artifacts.yaml (also stored as the dataset's attributes)."""
     from artifact_docs import stage_docs, with_tables
     page = (ROOT / "docs" / "artifacts.md").read_text()
     assert with_tables(page, stage_docs()) == page, "docs/artifacts.md is stale: python tests/artifact_docs.py"

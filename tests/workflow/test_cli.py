@@ -2,11 +2,12 @@
 
 import argparse
 import logging
+from dataclasses import dataclass, field
 
 import pytest
 
-from posefix.workflow.cli import (config_flags, configure_logging, float_list, int_list, named_options, named_path,
-                                 run_stage, stage_parser)
+from posefix.workflow.cli import (add_repair_option, authoring_parser, config_flags, configure_logging, dataset_docs,
+                                 float_list, int_list, named_options, named_path, run_stage, stage_parser)
 from posefix.io.errors import InputError
 
 
@@ -56,6 +57,37 @@ def test_library_loggers_reach_the_stage_log_file(tmp_path, capsys, posefix_logg
     assert "from the stage" in err and "detail" not in err  # DEBUG only in the file
     assert "posefix demo: warning: look" in err and "posefix demo: warning: look" in text  # the posefix command shows it
     assert log.name == "posefix.stages.demo"
+
+
+@dataclass(frozen=True)
+class _Settings:
+    count: int = field(default=3, metadata={"help": "how many", "minimum": 1})
+
+
+def test_a_stage_parser_declares_its_files_and_settings_in_one_call():
+    parser = stage_parser("demo", "a test stage", [(_Settings, "counting (config demo)")], mesh_file="the mesh",
+                          out="demo.h5 to write")
+    args = parser.parse_args(["--mesh-file", "a.obj", "--out", "a.h5"])
+    assert (args.mesh_file, args.out, args.count, args.threads, args.stage) == ("a.obj", "a.h5", 3, 1, "demo")
+    with pytest.raises(SystemExit):  # a file option is required
+        parser.parse_args(["--out", "a.h5"])
+    assert "counting (config demo)" in parser.format_help() and "the mesh" in parser.format_help()
+    add_repair_option(parser, "read it")
+    assert parser.parse_args(["--mesh-file", "a", "--out", "b", "--repair", "medial=m.h5"]).repair == [("medial", "m.h5")]
+
+
+def test_an_authoring_stage_names_its_library_after_its_source_file_unless_told():
+    parser = authoring_parser("demo", "", [], ("rig", "rig file"), "the rig's skeleton")
+    args = parser.parse_args(["--mesh", "a.obj", "--rig", "limb.yaml", "--out", "lib", "--artifact", "a.h5"])
+    assert (args.mesh, args.rig, args.out, args.artifact, args.name) == ("a.obj", "limb.yaml", "lib", "a.h5", None)
+    assert "default the rig file's" in " ".join(parser.format_help().split())
+
+
+def test_the_dataset_docs_of_a_stage_are_its_section_of_the_artifact_schema():
+    docs = dataset_docs("integrate")
+    assert list(docs)[:2] == ["positions", "samples"] and docs["positions"][0] == "length"
+    assert all(isinstance(units, str) and text for units, text in docs.values())
+    assert "history/max_error" in dataset_docs("fit")
 
 
 def _run(main, argv=()):

@@ -187,3 +187,19 @@ def read_repair(path, name, names):
     attrs : dict
     """
     return read_artifact(path, f"repair_{name}", names)
+
+
+def repaired_poses(named_paths):
+    """The repaired pose of each of other repairs' artifacts (:func:`read_repair`).
+
+    Parameters
+    ----------
+    named_paths : iterable of (str, str or Path)
+        (repair name, artifact path) pairs, e.g. ``[("medial", "results/lib/p/medial.h5")]``.
+
+    Returns
+    -------
+    dict of str -> ndarray
+        Repair name -> its dataset ``repaired``, (n, 3) float64.
+    """
+    return {name: read_repair(path, name, ["repaired"])[0]["repaired"] for name, path in named_paths}

@@ -11,6 +11,7 @@ stderr, everything (DEBUG too) in the ``--log`` file. Library modules log throug
 """
 
 import argparse
+import functools
 import inspect
 import logging
 import os
@@ -20,9 +21,14 @@ import sys
 import time
 from pathlib import Path
 
+import yaml
 from threadpoolctl import threadpool_limits
 
 from posefix.io.errors import InputError
+from posefix.workflow.files import workflow_folder
+from posefix.workflow.settings import add_settings_options
+
+_LOADER = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
 
 EXIT_INPUT_ERROR = 2
 
@@ -42,15 +48,84 @@ class StageHelpFormatter(argparse.ArgumentDefaultsHelpFormatter):
         return f"{text} (default: %(default)s)"
 
 
-def stage_parser(stage, description):
-    """An ``argparse`` parser with the options every stage has: ``--threads``, ``--log``."""
+def stage_parser(stage, description, settings=(), **files):
+    """An ``argparse`` parser with the options every stage has (``--threads``, ``--log``) and the stage's own.
+
+    Parameters
+    ----------
+    stage : str
+        The stage's name (``<stage>.py`` in the usage line).
+    description : str
+        The stage's docstring.
+    settings : sequence of (dataclass, str)
+        Option groups: a settings class (one option per field, :func:`posefix.workflow.settings.add_settings_options`)
+        and the group's title.
+    **files : str
+        The stage's required options, ``--name`` (underscores as dashes), each with its help, in the order given:
+        the files it reads and writes (``out``), mostly.
+
+    Returns
+    -------
+    argparse.ArgumentParser
+        The stage's further options are added by the caller.
+    """
     parser = argparse.ArgumentParser(prog=f"{stage}.py", description=description,
                                      formatter_class=StageHelpFormatter)
     parser.set_defaults(stage=stage)
     parser.add_argument("--threads", type=int, default=1,
                         help="maximum BLAS/OpenMP/OpenCL threads this stage may use")
     parser.add_argument("--log", default=None, help="also append the log to this file")
+    for name, text in files.items():
+        parser.add_argument("--" + name.replace("_", "-"), required=True, help=text)
+    for cls, title in settings:
+        add_settings_options(parser, cls, title)
     return parser
+
+
+def authoring_parser(stage, description, settings, source, artifact):
+    """The parser of a stage that authors a pose library from a reference mesh (:func:`stage_parser`): ``--mesh``,
+    the file of the poses, ``--out`` (the library's folder), ``--artifact`` and ``--name``.
+
+    Parameters
+    ----------
+    stage, description, settings
+        As for :func:`stage_parser`.
+    source : (str, str)
+        The option naming the file the poses come from (a rig, a pose script, marker tracks) and its help; the
+        library is named after that file unless ``--name`` is given.
+    artifact : str
+        What the HDF5 file ``--artifact`` holds.
+
+    Returns
+    -------
+    argparse.ArgumentParser
+    """
+    option, text = source
+    parser = stage_parser(stage, description, settings, mesh="reference mesh (.obj/.ply/.off, optionally .gz)",
+                          **{option: text}, out="folder of the authored pose library",
+                          artifact=f"HDF5 file of {artifact}")
+    parser.add_argument("--name", default=None, help=f"library name, the start of its files' names "
+                                                     f"(<name>-reference.*); default the {option} file's")
+    return parser
+
+
+@functools.cache
+def dataset_docs(stage):
+    """Units and description of every dataset of ``stage``'s artifact, from ``schemas/artifacts.yaml`` (their one
+    description; ``write_artifact`` stores them as the datasets' attributes).
+
+    Parameters
+    ----------
+    stage : str
+
+    Returns
+    -------
+    dict of str -> (str, str)
+        Dataset name -> (units, description), in the order the stage writes them.
+    """
+    path = workflow_folder() / "schemas" / "artifacts.yaml"
+    with open(path, encoding="utf-8") as fh:
+        return {name: tuple(doc) for name, doc in yaml.load(fh, Loader=_LOADER)[stage].items()}
 
 
 def run_stage(parser, main, argv=None):
@@ -211,6 +286,13 @@ def put_interpreter_first_on_path():
     """Put the folder of the running interpreter first on ``PATH`` (the workflow's rules call ``python``: the
     interpreter that runs Snakemake, e.g. a venv's, unless a conda environment of the rule comes first)."""
     os.environ["PATH"] = os.pathsep.join([str(Path(sys.executable).parent), os.environ.get("PATH", "")])
+
+
+def add_repair_option(parser, use):
+    """Add the repeatable option ``--repair NAME=PATH`` (another repair's artifact of the pose, :func:`named_path`) to
+    ``parser`` (argparse.ArgumentParser); ``use`` (str) says what the stage does with it."""
+    parser.add_argument("--repair", type=named_path, action="append", default=[], metavar="NAME=PATH",
+                        help=f"another repair's artifact (e.g. medial=<pose>/medial.h5): {use}; repeatable")
 
 
 def named_options(option, paths):
