@@ -369,3 +369,28 @@ def test_the_second_solve_runs_only_where_the_first_result_would_not_make_the_po
         assert cf._out_of_shape(problem, X, FinishSettings().rest_limit)  # the old bound ran the second solve
         assert cf._not_ok(problem, ContactResult(X, True, 9, none, np.inf, 0.0)) != ok
     assert cf._not_ok(problem, ContactResult(V, False, 400, none, np.inf, 0.0))
+
+
+def test_where_no_sample_after_the_reference_is_intersection_free_the_start_is_the_tracked_key_frames_alone():
+    """The finger of the test above, its path lines through its neighbour from the first sample on (the finger
+    shifted halfway into it): nothing of the integration is intersection-free, so the elastic finish starts from
+    the key frames tracked, and the contact solver tracks no path through the samples (one path: the key frames'),
+    to a result with no new intersecting face, within 4x of the target."""
+    A, FA = capsule(around=12, cap_rings=3, length_rings=24)
+    V, F = np.vstack([A, A + [0.0, 1.4, 0.0]]), np.vstack([FA, FA + len(A)])
+    finger = np.arange(len(V)) < len(A)
+    t = np.linspace(0.0, 1.0, 11)
+    frames = np.stack([np.where(finger[:, None], np.vstack([_turned(A, np.radians(20.0) * k), A]), V) for k in t])
+    samples = frames.copy()
+    samples[1:, finger] += [0.0, 0.7, 0.0]
+    pairs = [self_intersecting_pairs(P, F) for P in (V, frames[-1])]
+    problem = RepairProblem.build(V, frames[-1], F, ~finger | (V[:, 0] < -1.0), pairs)
+    assert all(len(self_intersecting_pairs(S, F)) for S in samples[1:])
+    solver, paths = ContactSolver(V, F), []
+    compute_path = solver.compute_path
+    solver.compute_path = lambda start, waypoints, *args, **kwargs: (paths.append(len(waypoints)),
+                                                                     compute_path(start, waypoints, *args, **kwargs))[1]
+    result = finish_pose(problem, samples, 1.0, solver, FinishSettings(), frames)
+    assert paths == [len(frames) - 1] and result.metrics["contact_start"] == "tracked"
+    assert result.metrics["repaired_new"] == 0 and result.metrics["contact_samples_tracked"] == len(samples) - 1
+    assert face_distortion(result.X, frames[-1], F)[0].max() < 4.0

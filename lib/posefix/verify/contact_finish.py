@@ -254,13 +254,18 @@ def new_faces(problem, X):
     return intersecting_faces(self_intersecting_pairs(X, F), len(F)) & ~problem.reference_faces
 
 
-def _intersection_free_start(problem, solver, samples):
-    """(start, label, samples tracked, Newton iterations): the integrated pose if intersection-free, else the
-    latest intersection-free sample carried along the later ones."""
-    last = len(samples) - 1
-    k = last
+def _latest_free_sample(problem, samples):
+    """The index of the latest sample of ``samples`` (S, n, 3) with no new intersecting face (0: the reference)."""
+    k = len(samples) - 1
     while k > 0 and new_faces(problem, samples[k]).any():
         k -= 1
+    return k
+
+
+def _intersection_free_start(problem, solver, samples, k):
+    """(start, label, samples tracked, Newton iterations): the integrated pose if intersection-free (``k``, the
+    :func:`_latest_free_sample`, is the last), else sample ``k`` carried along the later ones."""
+    last = len(samples) - 1
     if k == last:
         return samples[-1], "integrated", 0, 0
     result = solver.compute_path(samples[k], samples[k + 1:], WAYPOINT_TOLERANCE)
@@ -276,11 +281,21 @@ def _start(problem, solver, paths, motion, locked, settings):
     None)); the elastic finish takes instead the key frames tracked (``settings``: FinishSettings) where their energy
     is lower (:func:`_lower_energy_start`), with the constrained vertices in no barrier pair and not ``locked`` on
     their targets where CCD allows the move (:func:`_exact_constrained`). ``other``: the candidate not taken
-    (start and label; :func:`_lower_energy_result`), or None."""
+    (start and label; :func:`_lower_energy_result`), or None.
+
+    Where no sample after the reference is intersection-free, nothing of the integration is left to keep: the
+    elastic finish starts from the tracked key frames alone, and the reference is not tracked along the path lines
+    as well (kids-0001: 405 of verify's 821 s, for a candidate whose energy was higher)."""
     samples, frames = paths
-    start, label, tracked, iterations = _intersection_free_start(problem, solver, samples)
+    k = _latest_free_sample(problem, samples)
     if motion.elastic is None or frames is None:
-        return start, label, tracked, iterations, None
+        return *_intersection_free_start(problem, solver, samples, k), None
+    if k == 0:
+        result = _tracked_key_frames(problem, solver, frames, settings)
+        log.info("contact finish: no sample after the reference is intersection-free; the start is the key frames "
+                 "tracked (%d Newton iterations)", result.iterations)
+        return result.X, "tracked", len(samples) - 1, result.iterations, None
+    start, label, tracked, iterations = _intersection_free_start(problem, solver, samples, k)
     start, label, iterations, other = _lower_energy_start(problem, solver, frames, motion,
                                                           (start, label, iterations), settings)
     return start, label, tracked, iterations, other
@@ -356,8 +371,7 @@ def _lower_energy_start(problem, solver, frames, motion, integrated, settings):
     as one on the right side. ``other``: (start, label) of the whole candidate not taken (the integrated one when
     the start is mixed)."""
     X, label, iterations = integrated
-    result = solver.compute_path(frames[0], frames[1:], weights=np.where(problem.mask, settings.constrained_weight, 1.0),
-                                 max_iterations=settings.tracked_iterations)
+    result = _tracked_key_frames(problem, solver, frames, settings)
     free = np.where(problem.mask, 0.0, motion.free_weight)
     regions = _free_regions(problem)
     energies = [solver.elastic_energy(Y, motion.goal, free, motion.elastic, regions) for Y in (X, result.X)]
@@ -366,6 +380,14 @@ def _lower_energy_start(problem, solver, frames, motion, integrated, settings):
     start, taken = _regional_start(problem, solver, (X, label), result.X, energies, regions)
     other = (X, label) if taken.startswith("tracked") else (result.X, "tracked")
     return start, taken, iterations + result.iterations, other
+
+
+def _tracked_key_frames(problem, solver, frames, settings):
+    """The ContactResult of the key frames ``frames`` (K, n, 3) tracked by the contact solver from the reference, V_C
+    weighted ``settings.constrained_weight`` (FinishSettings), at most ``settings.tracked_iterations`` Newton
+    iterations per key frame."""
+    return solver.compute_path(frames[0], frames[1:], weights=np.where(problem.mask, settings.constrained_weight, 1.0),
+                               max_iterations=settings.tracked_iterations)
 
 
 def _free_regions(problem):
