@@ -14,7 +14,8 @@ pipeline's results) and S0 at production sizes, one camel and one kids pose end 
 which also runs alone), ipctk's broad phases on the contact solver's queries (benchmarks/broad_phase.py, which also
 runs alone), the downstream check's old vs new solver on lion-01 and camel-01 (benchmarks/downstream.py,
 which also runs alone), and USD and glTF libraries against folders of mesh files (benchmarks/containers.py, which
-also runs alone). Everything is collected into
+also runs alone), and a 58-pose library (horse-poses and horse-gallop) end to end with every repair, per stage and
+per pose (benchmarks/library.py, which also runs alone). Everything is collected into
 ``BENCHMARKS.md`` and ``BENCHMARKS.json`` (plus ``blocked_vs_full.png``) next to the per-library
 pieces (``summary-<library>.md``: the library's per-pose summary), with the hand-written prose of
 ``benchmarks/notes.md`` in place; the same command on the same data gives the same tables, times aside.
@@ -214,6 +215,8 @@ def report(info, benchmarks, note, out):
     lines += (out / "broad-phase.md").read_text().splitlines() + [""]
     lines += (out / "downstream.md").read_text().splitlines() + [""]
     lines += (out / "containers.md").read_text().splitlines() + [""]
+    if (out / "library.md").exists():  # horse-poses and horse-gallop present
+        lines += (out / "library.md").read_text().splitlines() + [""]
     return with_notes("\n".join(lines), "BENCHMARKS.md")
 
 
@@ -240,6 +243,7 @@ def main():
     run(sys.executable, ROOT / "benchmarks" / "broad_phase.py", "--out", out)
     run(sys.executable, ROOT / "benchmarks" / "downstream.py", "--out", out)  # lion-01, and camel-01 from scale.py
     run(sys.executable, ROOT / "benchmarks" / "containers.py", "--out", out, "--cores", args.cores)
+    run(sys.executable, ROOT / "benchmarks" / "library.py", "--out", out, "--cores", args.cores)
     note += f" Wall time of the whole benchmark: {(time.perf_counter() - start) / 60:.1f} min."
     (out / "BENCHMARKS.md").write_text(report(info, benchmarks, note.strip(), out))
     (out / "BENCHMARKS.json").write_text(json.dumps({"machine": info, "libraries": benchmarks}, indent=1))
