@@ -50,7 +50,8 @@ def main(args, log):
     write_artifact(args.out, "repair_contact",
                    {"start": frames[-1], "repaired": result.X / unit, "contact": result.contact,
                     "new_faces": result.new_faces},
-                   params=params, inputs=[args.keyframes, args.classify], timings=timings, metrics=metrics, docs=dataset_docs("repair_contact"))
+                   params=params, inputs=[args.keyframes, args.classify], timings=timings, metrics=metrics,
+                   docs=dataset_docs("repair_contact"))
 
 
 if __name__ == "__main__":

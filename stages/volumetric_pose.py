@@ -86,7 +86,8 @@ def main(args, log):
                     "seconds": np.array([a.seconds for a in authored.values()])}
         params = {k: v for k, v in vars(args).items() if k not in ("log", "artifact", "threads")}
         write_artifact(args.artifact, "volumetric_pose", datasets, params=params, inputs=[args.mesh, args.script],
-                       timings=timings, metrics={"tet_vertices": len(X), "tets": len(T)}, docs=dataset_docs("volumetric_pose"))
+                       timings=timings, metrics={"tet_vertices": len(X), "tets": len(T)},
+                       docs=dataset_docs("volumetric_pose"))
 
 
 if __name__ == "__main__":
