@@ -180,7 +180,7 @@ def downstream_section(benchmarks):
 
 def report(info, benchmarks, note, out):
     """BENCHMARKS.md text, with its notes (benchmarks/notes.md)."""
-    lines = ["# posefix benchmarks", "", "Command: `make bench` (benchmarks/run.py). " + note, "",
+    lines = ["# posefix benchmarks", "", COMMAND + note, "",
              "## Machine", "", *[f"- {k}: {v}" for k, v in info.items()], "",
              "## Repair (S0 pipeline end to end)", "", *repair_table(benchmarks), "",
              "Counts are poses. 'new': faces intersecting in the repaired pose but not in the reference; "
@@ -220,11 +220,31 @@ def report(info, benchmarks, note, out):
     return with_notes("\n".join(lines), "BENCHMARKS.md")
 
 
+COMMAND = "Command: `make bench` (benchmarks/run.py). "
+"""The start of BENCHMARKS.md's first line; the run's note follows."""
+
+
+def collect(out):
+    """Write BENCHMARKS.md again from BENCHMARKS.json and the pieces in ``out`` (Path), after a piece ran alone
+    (e.g. ``benchmarks/repairs.py``), running nothing; the note of the last full run is kept."""
+    saved = json.loads((out / "BENCHMARKS.json").read_text())
+    page = out / "BENCHMARKS.md"
+    note = saved.get("note") or next((line[len(COMMAND):] for line in page.read_text().splitlines()
+                                      if line.startswith(COMMAND)), "")
+    page.write_text(report(saved["machine"], saved["libraries"], note, out))
+    print(f"wrote {page} from the pieces in {out}")
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--cores", type=int, default=2)
     parser.add_argument("--out", default=str(ROOT / "reports" / "bench"))
+    parser.add_argument("--collect", action="store_true",
+                        help="write BENCHMARKS.md again from BENCHMARKS.json and the pieces in --out, running nothing "
+                             "(after a piece ran alone)")
     args = parser.parse_args()
+    if args.collect:
+        return collect(Path(args.out))
     libraries = [DATA / name for name in LIBRARIES if (DATA / name).is_dir()]
     note = ("" if libraries else f"{DATA} is absent: this ran on the built-in demo library only.")
     out = Path(args.out)
@@ -246,7 +266,8 @@ def main():
     run(sys.executable, ROOT / "benchmarks" / "library.py", "--out", out, "--cores", args.cores)
     note += f" Wall time of the whole benchmark: {(time.perf_counter() - start) / 60:.1f} min."
     (out / "BENCHMARKS.md").write_text(report(info, benchmarks, note.strip(), out))
-    (out / "BENCHMARKS.json").write_text(json.dumps({"machine": info, "libraries": benchmarks}, indent=1))
+    (out / "BENCHMARKS.json").write_text(json.dumps({"machine": info, "libraries": benchmarks, "note": note.strip()},
+                                                    indent=1))
     print(f"wrote {out / 'BENCHMARKS.md'} and {out / 'BENCHMARKS.json'}")
 
 
