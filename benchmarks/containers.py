@@ -29,8 +29,8 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests"))
 from containers import library_into_containers, write_gltf, write_usd_frames  # noqa: E402  (tests/containers.py)
-from posefix.io.containers import member_digests, open_container  # noqa: E402
-from posefix.io.meshes import read_mesh, write_mesh  # noqa: E402
+from posefix.io.containers import open_container  # noqa: E402
+from posefix.io.meshes import write_mesh  # noqa: E402
 from posefix.report.tables import entry_status  # noqa: E402
 
 POINTS, POSES = 50_000, 100

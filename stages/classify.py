@@ -14,7 +14,8 @@ import numpy as np
 from posefix.mesh.contacts import contact_vertices
 from posefix.mesh.geometry import bbox_diagonal
 from posefix.mesh.intersections import intersecting_faces, new_pairs, self_intersecting_pairs
-from posefix.io.artifacts import read_artifact, write_artifact
+from posefix.io.artifacts import write_artifact
+from posefix.io.keyframes import read_keyframes
 from posefix.workflow.cli import dataset_docs, int_list, run_stage, stage_parser
 from posefix.io.errors import InputError
 from posefix.io.library import read_vertex_ids
@@ -36,7 +37,7 @@ def main(args, log):
     if args.ring < 0 or args.contact < 0 or args.contact_radius <= 0:
         raise InputError("arguments", "--ring and --contact must be >= 0, --contact-radius > 0")
     with timings.step("read"):
-        data, _ = read_artifact(args.keyframes, "keyframes", ["frames", "faces", "reference", "weld_index"])
+        data, _ = read_keyframes(args.keyframes, ["frames", "faces", "reference", "weld_index"])
     frames, F, V_ref = data["frames"], data["faces"], data["reference"]
     n, K = len(V_ref), len(frames)
     exclude = data["weld_index"][_exclusions(args, len(data["weld_index"]))]  # input vertex ids -> welded

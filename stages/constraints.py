@@ -10,6 +10,7 @@ import posefix.workflow.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; r
 
 from posefix.mesh.geometry import bbox_diagonal
 from posefix.io.artifacts import read_artifact, write_artifact
+from posefix.io.keyframes import read_keyframes
 from posefix.workflow.cli import dataset_docs, run_stage, stage_parser
 from posefix.io.errors import InputError
 from posefix.workflow.timings import Timings
@@ -28,7 +29,7 @@ def main(args, log):
         raise InputError("arguments", "--samples must be >= 2 and --tau > 0")
     timings = Timings()
     with timings.step("read"):
-        kf, _ = read_artifact(args.keyframes, "keyframes", ["frames", "t", "reference"])
+        kf, _ = read_keyframes(args.keyframes, ["frames", "t", "reference"])
         cl, _ = read_artifact(args.classify, "classify", ["mask"])
     if cl["mask"].shape[0] != kf["reference"].shape[0]:
         raise InputError(args.classify, "V_C mask does not match the key frames' vertex count")

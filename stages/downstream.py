@@ -13,7 +13,7 @@ runs at a time (processes of one thread each; the same iterations and stop reaso
 import posefix.workflow.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; runtime defaults before numpy)
 
 from posefix.downstream.check import downstream_check
-from posefix.downstream.gauss_newton import STOP_REASONS, SolverSettings
+from posefix.downstream.gauss_newton import SolverSettings
 from posefix.io.artifacts import read_artifact, repaired_poses, write_artifact
 from posefix.workflow.cli import add_repair_option, dataset_docs, run_stage, stage_parser
 from posefix.workflow.stage_settings import DownstreamSettings

@@ -1,8 +1,9 @@
 """Stage keyframes: key frames from the reference to one target pose (S0 §4.1).
 
 Gradient-space interpolation (Xu et al. 2005) with global rigid alignment and rotation-branch
-unwrapping; see ``posefix.spacetime.keyframes`` for the method. Writes ``keyframes.h5`` with the K frames at
-t = k/(K-1), the two input poses, and per-face rotation diagnostics.
+unwrapping; see ``posefix.spacetime.keyframes`` for the method. Writes ``keyframes.h5`` with the two input poses, the
+K - 2 inner frames at t = k/(K-1) as float32 offsets from their linear blend (``posefix.io.keyframes``), and
+per-face rotation diagnostics.
 """
 
 from pathlib import Path
@@ -12,6 +13,7 @@ import numpy as np
 
 from posefix.mesh.geometry import bbox_diagonal
 from posefix.io.artifacts import write_artifact
+from posefix.io.keyframes import frame_offsets
 from posefix.workflow.cli import dataset_docs, run_stage, stage_parser
 from posefix.io.library import read_welded_pair
 from posefix.workflow.timings import Timings
@@ -48,7 +50,8 @@ def main(args, log):
     log.info("endpoint error / bbox diagonal: reference %.1e, target %.1e", err0, err1)
     write_artifact(
         args.out, "keyframes",
-        {"t": t, "frames": frames, "faces": F, "reference": V_ref, "target": V_tgt, "weld_index": weld.index,
+        {"t": t, "frame_offsets": frame_offsets(frames, t, V_ref, V_tgt), "faces": F, "reference": V_ref,
+         "target": V_tgt, "weld_index": weld.index,
          "rotation_angle": angle, "branch_turns": interp.turns, "global_rotation": interp.global_omega},
         params={"count": args.count, "align": args.align, "unwrap": args.unwrap},
         inputs=[args.reference, args.target], timings=timings,

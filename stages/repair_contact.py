@@ -9,15 +9,14 @@ tolerated). See ``posefix.contact.keyframe_tracking``.
 import posefix.workflow.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; runtime defaults before numpy)
 from dataclasses import asdict
 
-import numpy as np
-
 from posefix.contact.keyframe_tracking import track_keyframes
 from posefix.mesh.contact_solver import ContactSettings, ContactSolver
 from posefix.mesh.geometry import unit_scale
 from posefix.mesh.intersections import intersecting_faces
 from posefix.io.artifacts import read_artifact, write_artifact
+from posefix.io.keyframes import read_keyframes
 from posefix.workflow.cli import dataset_docs, run_stage, stage_parser
-from posefix.workflow.settings import add_settings_options, settings_from
+from posefix.workflow.settings import settings_from
 from posefix.workflow.timings import Timings
 from posefix.spacetime.classification import split_frames
 
@@ -31,9 +30,9 @@ def build_parser():
 def main(args, log):
     timings = Timings()
     with timings.step("read"):
-        kf, _ = read_artifact(args.keyframes, "keyframes", ["frames", "faces", "reference", "target"])
+        kf, _ = read_keyframes(args.keyframes, ["frames", "faces"])
         cl, _ = read_artifact(args.classify, "classify", ["pairs", "pair_offsets"])
-    frames, F = np.concatenate([kf["reference"][None], kf["frames"][1:-1], kf["target"][None]]), kf["faces"]
+    frames, F = kf["frames"], kf["faces"]  # the reference first, the target last
     unit = unit_scale(frames[0])  # the working unit: a library at 1e-30 or 1e+30 repairs as at 1
     reference_pairs = split_frames(cl["pairs"], cl["pair_offsets"])[0]
     reference_faces = intersecting_faces(reference_pairs, len(F))
@@ -48,7 +47,7 @@ def main(args, log):
                                 "intersecting_faces_repaired_new": int(result.new_faces.sum()),
                                 "seconds": timings["prepare"] + timings["repair"]}
     write_artifact(args.out, "repair_contact",
-                   {"start": frames[-1], "repaired": result.X / unit, "contact": result.contact,
+                   {"repaired": result.X / unit, "contact": result.contact,
                     "new_faces": result.new_faces},
                    params=params, inputs=[args.keyframes, args.classify], timings=timings, metrics=metrics,
                    docs=dataset_docs("repair_contact"))

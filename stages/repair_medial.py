@@ -43,7 +43,7 @@ def main(args, log):
     log.info("new intersecting faces: target %d, rebuilt start %d (%d vertices, reach %g radii), repaired %d "
              "(%d flow iterations, best %d), %.2f s", result.target_faces, result.start_faces, result.free.sum(),
              result.reach, final, flow.iterations, flow.best, result.seconds)
-    datasets = {"start": X, "repaired": result.X, "intersecting": flow.intersecting, "error": flow.error,
+    datasets = {"repaired": result.X, "intersecting": flow.intersecting, "error": flow.error,
                 "step_seconds": flow.step_seconds, "skeleton": result.S_d, "free": result.free}
     metrics = {"iterations": flow.iterations, "best": flow.best, "seconds": result.seconds, "reach": result.reach,
                "free_vertices": int(result.free.sum()), "intersecting_faces_target": result.target_faces,

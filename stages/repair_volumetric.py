@@ -47,7 +47,7 @@ def main(args, log):
     log.info("new intersecting faces: target %d, filled %d (%d free vertices, %d rings), V_C residual spread "
              "%.3g, %.2f s", result.target_faces, final, result.free.sum(), result.rings, result.residual,
              result.seconds)
-    datasets = {"start": X, "repaired": result.X, "free": result.free, "tets": result.tets,
+    datasets = {"repaired": result.X, "free": result.free, "tets": result.tets,
                 "shear": result.shear}
     metrics = {"iterations": args.iterations, "rings": result.rings, "seconds": result.seconds,
                "free_vertices": int(result.free.sum()), "residual": result.residual,

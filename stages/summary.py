@@ -55,7 +55,8 @@ def summarize_pose(results, pose, repairs=(), limit=4.0):
     if repairs:
         mask = read_artifact(folder / "classify.h5", "classify", ["mask"])[0]["mask"].astype(bool)
         d = float(metrics["keyframes"]["bbox_diagonal"])
-        compared = {name: summarize_repair(folder / f"{name}.h5", name, mask, d, downstream, measure)
+        target = (shapes["target"], mask, d)
+        compared = {name: summarize_repair(folder / f"{name}.h5", name, target, downstream, measure)
                     for name in repairs}
         for name, entry in compared.items():  # wall seconds of the stage, as space-time's (the artifact's: in-process)
             wall = benchmark_seconds(Path(results) / "benchmarks" / pose, f"repair_{name}")
@@ -63,15 +64,15 @@ def summarize_pose(results, pose, repairs=(), limit=4.0):
     return pose_entry(pose, metrics, downstream, seconds, compared, measure(repaired))
 
 
-def summarize_repair(path, name, mask, d, downstream, measure):
-    """``repairs.<name>`` of a pose's entry: the artifact's metrics, the deviation of its repaired pose from
-    its start (the target) over ``mask`` (V_C) and the rest relative to ``d``, the downstream runs towards it,
-    ``measure`` (its distortion summary) of the repaired pose."""
-    data, attrs = read_repair(path, name, ["start", "repaired"])
-    if not data["start"].shape == data["repaired"].shape == (len(mask), 3):
-        raise InputError(path, f"start {data['start'].shape} and repaired {data['repaired'].shape} are not "
-                               f"({len(mask)}, 3) like the pose")
-    _, summary = deviation(data["repaired"], data["start"], mask, d)
+def summarize_repair(path, name, target, downstream, measure):
+    """``repairs.<name>`` of a pose's entry: the artifact's metrics, the deviation of its repaired pose from the
+    target over ``V_C`` and the rest relative to ``d`` (``target``: the target (n, 3), ``V_C`` (n,) bool and ``d``),
+    the downstream runs towards it, ``measure`` (its distortion summary) of the repaired pose."""
+    V_tgt, mask, d = target
+    data, attrs = read_repair(path, name, ["repaired"])
+    if data["repaired"].shape != V_tgt.shape:
+        raise InputError(path, f"repaired {data['repaired'].shape} is not {V_tgt.shape} like the pose")
+    _, summary = deviation(data["repaired"], V_tgt, mask, d)
     return repair_entry(name, attrs["metrics"], summary, downstream, measure(data["repaired"]))
 
 

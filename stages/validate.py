@@ -3,8 +3,9 @@
 Reads the reference and the chosen target poses (as trimesh with process=False), and stops at the first
 problem with one line naming the file: unreadable or empty file, not a triangle mesh, NaN/inf
 coordinates, face indices out of range, degenerate or zero-area reference faces, a reference too small
-for the fit, a vertex count or face array that differs from the reference. Writes the reference mesh and
-a manifest (name, path, format, sha256) of the files read. The workflow runs it once for the reference
+for the fit, a vertex count or face array that differs from the reference. Writes a manifest (name, path,
+format, sha256) of the files read and the reference's measures (vertices, faces, bounding-box diagonal, its own
+intersecting faces); the later stages read the meshes from the files. The workflow runs it once for the reference
 (``--reference-only``: ``reference.h5``) and once per pose (``--poses <pose>``: ``<pose>/validate.h5``),
 so adding or fixing a pose reruns only that pose.
 """
@@ -59,8 +60,7 @@ def main(args, log):
         sha = [file_sha256(f.path) for f in files]
     write_artifact(
         args.out, "validate",
-        {"reference/vertices": V_ref, "faces": F,
-         "poses/name": np.array([f.name for f in files]),
+        {"poses/name": np.array([f.name for f in files]),
          "poses/path": np.array([f.path for f in files]),
          "poses/format": np.array([f.suffix for f in files]),
          "poses/sha256": np.array(sha)},

@@ -18,10 +18,10 @@ import posefix.workflow.interrupt  # noqa: F401  (first: Ctrl-C exits quietly; r
 from posefix.mesh.contact_solver import ContactSettings
 from posefix.mesh.geometry import unit_scale
 from posefix.io.artifacts import carried_metrics, read_artifact, write_artifact
+from posefix.io.keyframes import read_keyframes
 from posefix.workflow.cli import dataset_docs, run_stage, stage_parser
 from posefix.workflow.timings import Timings
 from posefix.verify.contact_finish import FinishSettings
-from posefix.verify.flags import describe_flags
 from posefix.verify.sequence import RepairSettings, finish_settings, finished_pose
 from posefix.verify.state import RepairProblem
 from posefix.spacetime.classification import split_frames
@@ -40,7 +40,7 @@ def build_parser():
 def main(args, log):
     timings = Timings()
     with timings.step("read"):
-        kf, kattrs = read_artifact(args.keyframes, "keyframes", ["reference", "target", "faces", "frames"])
+        kf, kattrs = read_keyframes(args.keyframes, ["reference", "target", "faces", "frames"])
         cl, _ = read_artifact(args.classify, "classify", ["mask", "pairs", "pair_offsets"])
         it, iattrs = read_artifact(args.integrate, "integrate", ["positions", "samples"])
         _, fattrs = read_artifact(args.fit, "fit", [])

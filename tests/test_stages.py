@@ -11,6 +11,7 @@ import pytest
 from conftest import ROOT, run_stage
 from posefix import __version__
 from posefix.io.artifacts import config_hash, inputs_hash
+from posefix.io.keyframes import read_keyframes
 
 STAGES = ["demo", "validate", "keyframes", "classify", "constraints", "fit", "integrate", "verify", "export",
           "downstream", "summary", "render", "overview", "skeletal_pose", "skeleton", "repair_medial",
@@ -185,10 +186,11 @@ def test_render_draws_the_other_repair_beside_s0(demo_artifacts, medial, tmp_pat
 
 def test_keyframes_and_classify_contents(demo_artifacts):
     with h5py.File(demo_artifacts / "keyframes.h5", "r") as fh:
-        frames, t = fh["frames"][()], fh["t"][()]
-        assert np.array_equal(t, [0, 0.25, 0.5, 0.75, 1])
-        assert np.abs(frames[0] - fh["reference"][()]).max() < 1e-9 * fh["metrics"].attrs["bbox_diagonal"]
-        assert np.abs(frames[-1] - fh["target"][()]).max() < 1e-9 * fh["metrics"].attrs["bbox_diagonal"]
+        t, offsets, metrics = fh["t"][()], fh["frame_offsets"], fh["metrics"].attrs
+        assert np.array_equal(t, [0, 0.25, 0.5, 0.75, 1]) and offsets.shape[0] == 3 and offsets.dtype == np.float32
+        assert max(metrics["endpoint_error_reference"], metrics["endpoint_error_target"]) < 1e-9
+    frames = read_keyframes(demo_artifacts / "keyframes.h5", ["frames"])[0]["frames"]
+    assert frames.shape[0] == 5 and np.abs(frames[2] - frames[0]).max() > 0.01  # the inner frames move
     with h5py.File(demo_artifacts / "classify.h5", "r") as fh:
         offsets, counts = fh["pair_offsets"][()], fh["intersecting_faces"][()]
         assert len(offsets) == 6 and offsets[-1] == len(fh["pairs"])

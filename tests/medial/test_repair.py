@@ -101,7 +101,7 @@ def test_the_stages_repair_a_demo_pose_and_refuse_a_foreign_one(tmp_path):
         metrics = fh["metrics"].attrs
         assert fh.attrs["stage"] == "repair_medial" and metrics["intersecting_faces_repaired_new"] == 0
         assert metrics["intersecting_faces_target"] > 0 and fh["intersecting"][0] == metrics["intersecting_faces_start"]
-        assert np.array_equal(fh["start"][()], read_mesh(tmp_path / "bent.obj")[0])
+        assert "start" not in fh  # the target: the summary reads it from keyframes.h5
         X = fh["repaired"][()]
     run_stage("export", "--artifact", tmp_path / "medial.h5", "--stage", "repair_medial",
               "--reference", tmp_path / "ref.obj", "--target", tmp_path / "bent.obj", "--out", tmp_path / "out.obj")

@@ -9,7 +9,8 @@ from posefix.mesh.intersections import intersecting_faces, self_intersecting_pai
 from posefix.mesh.rotations import rotation_exp
 from posefix.mesh.topology import edges
 from posefix.io.meshes import read_mesh
-from posefix.spacetime.keyframes import deformation_gradients, keyframes
+from posefix.spacetime.keyframes import deformation_gradients, keyframes, prepare
+from posefix.spacetime.keyframes import frame as frame_at
 
 
 @pytest.mark.parametrize("align,unwrap", [(True, True), (False, False)])
@@ -17,10 +18,11 @@ def test_endpoints_are_reproduced(demo, align, unwrap):
     V_ref, F, poses = demo
     d = bbox_diagonal(V_ref)
     for V_tgt in poses.values():
-        frames, t, _ = keyframes(V_ref, V_tgt, F, 11, align=align, unwrap=unwrap)
+        frames, t, interp = keyframes(V_ref, V_tgt, F, 11, align=align, unwrap=unwrap)
         assert t[0] == 0.0 and t[-1] == 1.0 and len(frames) == 11
-        assert np.abs(frames[0] - V_ref).max() <= 1e-9 * d
-        assert np.abs(frames[-1] - V_tgt).max() <= 1e-9 * d
+        assert np.array_equal(frames[0], V_ref) and np.array_equal(frames[-1], V_tgt)  # as stored
+        assert np.abs(frame_at(interp, 0.0) - V_ref).max() <= 1e-9 * d  # the interpolation itself
+        assert np.abs(frame_at(interp, 1.0) - V_tgt).max() <= 1e-9 * d
 
 
 def test_endpoints_with_several_components():
@@ -30,10 +32,10 @@ def test_endpoints_with_several_components():
     rng = np.random.default_rng(0)
     V_tgt = V + 0.05 * rng.normal(size=V.shape)
     V_tgt[len(V1):] += [0.0, 1.0, 0.0]
-    frames, _, _ = keyframes(V, V_tgt, F, 5)
+    interp = prepare(V, V_tgt, F)
     d = bbox_diagonal(V)
-    assert np.abs(frames[0] - V).max() <= 1e-9 * d
-    assert np.abs(frames[-1] - V_tgt).max() <= 1e-9 * d
+    assert np.abs(frame_at(interp, 0.0) - V).max() <= 1e-9 * d
+    assert np.abs(frame_at(interp, 1.0) - V_tgt).max() <= 1e-9 * d
 
 
 @pytest.mark.parametrize("align", [True, False])

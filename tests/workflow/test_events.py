@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 from snakemake_interface_logger_plugins.registry import LoggerPluginRegistry
 
-from posefix.workflow.events import EventRecorder, failed_job_errors, failure_line, record_events
+from posefix.workflow.events import EventRecorder, failed_job_errors, record_events
 from posefix.workflow.progress import RunProgress
 from snakemake_logger_plugin_posefix import LogHandler, LogHandlerSettings
 
