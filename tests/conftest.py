@@ -150,13 +150,13 @@ bench)."""
 @pytest.fixture(scope="session")
 def lion_run(tmp_path_factory):
     """The workflow on :data:`LION_POSES` of ../shared/data/lion-poses with S0 alone (``repairs=[]``; every pose
-    and every repair: make bench) up to the library's summary (no figures, no viewer), once per session: the folder
-    it ran in (skips when the library is absent)."""
+    and every repair: make bench) and one downstream step up to the library's summary (no figures, no viewer), once
+    per session: the folder it ran in (skips when the library is absent)."""
     library = shared_library("lion-poses")
 
     def make(work):
         proc = snakemake(work, "reports/lion-poses/summary.json", "--config", f"library={library}", "repairs=[]",
-                         f"poses={','.join(LION_POSES)}")
+                         f"poses={','.join(LION_POSES)}", "downstream={'max_iters': 1}")
         assert proc.returncode == 0, proc.stderr[-3000:]
     return once_per_session(tmp_path_factory, "lion-run", make)
 

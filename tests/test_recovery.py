@@ -66,17 +66,17 @@ def planned(checkout, work, *args):
 
 
 def test_adding_a_pose_plans_only_that_pose_and_a_code_change_only_what_it_changes(checkout, tmp_path):
-    library = balls(tmp_path / "lib", ["ball-01", "ball-02"])  # two, then a third: every repair runs
-    config = ["--config", f"library={library}"]
+    library = balls(tmp_path / "lib", ["ball-01", "ball-02"])  # two, then a third, with the contact repair beside
+    config = ["--config", f"library={library}", "repairs=[contact]"]
     proc = run(checkout, tmp_path, *config)
     assert proc.returncode == 0, proc.stderr[-3000:]
     V, F = icosphere(2)
     write_mesh(library / "ball-04.obj", V * SHAPES["ball-04"], F)
     jobs = planned(checkout, tmp_path, *config)
     per_pose = {"validate", "keyframes", "classify", "constraints", "fit", "integrate", "verify", "export",
-                "downstream", "render", "repair_medial", "repair_volumetric", "repair_contact"}
-    assert set(jobs) == per_pose | {"export_repair", "summary", "overview", "viewer", "all"}
-    assert all(jobs[rule] == 1 for rule in per_pose) and jobs["export_repair"] == 3
+                "downstream", "render", "repair_contact", "export_repair"}
+    assert set(jobs) == per_pose | {"summary", "overview", "viewer", "all"}
+    assert all(jobs[rule] == 1 for rule in per_pose)
     proc = run(checkout, tmp_path, *config)
     assert proc.returncode == 0, proc.stderr[-3000:]
     # a comment in the library module of the verify stage: verify and what reads its output rerun, and integrate, whose
@@ -97,13 +97,13 @@ def digests(folder):
 
 def test_a_bad_pose_fails_alone_with_one_line_and_earlier_results_stay(checkout, tmp_path):
     library = balls(tmp_path / "lib", ["ball-01"])
-    assert run(checkout, tmp_path, "--config", f"library={library}").returncode == 0
+    assert run(checkout, tmp_path, "--config", f"library={library}", "repairs=[]").returncode == 0
     results = tmp_path / "results" / "lib"
     before = digests(results)
     V, F = icosphere(2)
     write_mesh(library / "ball-02.ply", np.vstack([V, [[9.0, 9.0, 9.0]]]), F)  # one vertex too many
     write_mesh(library / "ball-03.obj", V * SHAPES["ball-03"], F)
-    proc = run(checkout, tmp_path, "--config", f"library={library}")
+    proc = run(checkout, tmp_path, "--config", f"library={library}", "repairs=[]")
     assert proc.returncode != 0
     errors = [line for line in proc.stderr.splitlines() if line.startswith("posefix validate: error:")]
     assert len(errors) == 1 and "ball-02.ply" in errors[0] and "vertices" in errors[0]
