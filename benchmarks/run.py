@@ -14,7 +14,7 @@ pipeline's results) and S0 at production sizes, one camel and one kids pose end 
 which also runs alone), ipctk's broad phases on the contact solver's queries (benchmarks/broad_phase.py, which also
 runs alone), the downstream check's old vs new solver on lion-01 and camel-01 (benchmarks/downstream.py,
 which also runs alone), and USD and glTF libraries against folders of mesh files (benchmarks/containers.py, which
-also runs alone), and a 58-pose library (horse-poses and horse-gallop) end to end with every repair, per stage and
+also runs alone), and a 59-pose library (horse-poses and horse-gallop) end to end with every repair, per stage and
 per pose (benchmarks/library.py, which also runs alone). Everything is collected into
 ``BENCHMARKS.md`` and ``BENCHMARKS.json`` (plus ``blocked_vs_full.png``) next to the per-library
 pieces (``summary-<library>.md``: the library's per-pose summary), with the hand-written prose of
