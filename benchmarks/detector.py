@@ -15,11 +15,11 @@ import platform
 import time
 from pathlib import Path
 
-import h5py
 import numpy as np
 import pymeshlab
 from threadpoolctl import threadpool_limits
 
+from posefix.io.keyframes import read_keyframes
 from posefix.mesh.intersections import intersecting_faces, self_intersecting_pairs
 
 
@@ -44,8 +44,8 @@ def bench_library(results, repeat):
     """One row per pose: frames, faces, seconds of both detectors, face counts."""
     rows = []
     for path in sorted(Path(results).glob("*/keyframes.h5")):
-        with h5py.File(path, "r") as fh:
-            frames, F = fh["frames"][()], fh["faces"][()]
+        kf, _ = read_keyframes(path, ["frames", "faces"])
+        frames, F = kf["frames"], kf["faces"]
         ours_s = pml_s = 0.0
         ours_n, pml_n = [], []
         for V in frames:

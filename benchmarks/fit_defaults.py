@@ -18,9 +18,9 @@ import time
 from pathlib import Path
 
 import posefix  # noqa: F401  (runtime defaults before numpy)
-import h5py
 import numpy as np
 
+from posefix.io.keyframes import read_keyframes
 from posefix.mesh.contacts import contact_vertices
 from posefix.mesh.geometry import bbox_diagonal
 from posefix.mesh.intersections import intersecting_faces, self_intersecting_pairs
@@ -45,8 +45,8 @@ def parse_grid(text):
 
 
 def run(results, pose, cfg, classify_cache):
-    with h5py.File(Path(results) / pose / "keyframes.h5", "r") as fh:
-        frames, t, F = fh["frames"][()], fh["t"][()], fh["faces"][()]
+    kf, _ = read_keyframes(Path(results) / pose / "keyframes.h5", ["frames", "t", "faces"])
+    frames, t, F = kf["frames"], kf["t"], kf["faces"]
     V_ref, V_tgt = frames[0], frames[-1]
     d = bbox_diagonal(V_ref)
     key = (cfg["contact"], cfg["ring"])
