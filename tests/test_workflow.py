@@ -383,9 +383,10 @@ def _limb_summary(folder, scale):
 def test_a_library_at_1e_minus_30_or_1e_plus_30_repairs_as_at_1(tmp_path):
     """A pose of the demo limb at 1e-30, 1 and 1e+30 (at 1e-30 the contact solver once ended in ipctk's "unable
     to project matrix onto positive semi-definite cone" after 85,000 "Small gap" warnings): S0 and the contact repair
-    give the same status and intersecting-face counts, and deviations in d equal within 1e-8 (the solvers work in
-    the reference's unit, a power of two that scales exactly; the key frames are stored to float32 precision of their
-    offsets from the linear blend, below 1e-8 d, and a scaled pose's offsets may round to the next float32)."""
+    give the same status and intersecting-face counts, and deviations in d equal within 1e-7 (the solvers work in
+    the reference's unit, a power of two that scales exactly, but the key frames are stored to float32 precision of
+    their offsets from the linear blend, and a scaled pose's offsets may round to the neighbouring float32: about
+    1e-9 d, which the contact finish moves the free region's farthest vertex by up to ten times, 1.5e-8 d at 1e+30)."""
     runs = {scale: _limb_summary(tmp_path / f"{scale:g}", scale) for scale in (1.0, 1e-30, 1e30)}
     for scale in (1e-30, 1e30):
         assert len(runs[1.0]) == len(runs[scale]) == 1
@@ -394,7 +395,7 @@ def test_a_library_at_1e_minus_30_or_1e_plus_30_repairs_as_at_1(tmp_path):
             pairs = [(ours, theirs), (ours["repairs"]["contact"], theirs["repairs"]["contact"])]
             for a, b in pairs:
                 assert a["intersecting_faces"] == b["intersecting_faces"], (scale, ours["pose"])
-                assert a["deviation"] == pytest.approx(b["deviation"], rel=0, abs=1e-8), (scale, ours["pose"])
+                assert a["deviation"] == pytest.approx(b["deviation"], rel=0, abs=1e-7), (scale, ours["pose"])
 
 
 def test_a_pose_that_fails_now_is_not_taken_as_finished_from_an_earlier_runs_files(tmp_path):
