@@ -51,8 +51,8 @@ def main(args, log):
     write_artifact(
         args.out, "keyframes",
         {"t": t, "frame_offsets": frame_offsets(frames, t, V_ref, V_tgt), "faces": F, "reference": V_ref,
-         "target": V_tgt, "weld_index": weld.index,
-         "rotation_angle": angle.astype(np.float32), "branch_turns": interp.turns, "global_rotation": interp.global_omega},
+         "target": V_tgt, "weld_index": weld.index, "rotation_angle": angle.astype(np.float32),
+         "branch_turns": interp.turns, "global_rotation": interp.global_omega},
         params={"count": args.count, "align": args.align, "unwrap": args.unwrap},
         inputs=[args.reference, args.target], timings=timings,
         metrics={"vertices": len(V_ref), "input_vertices": len(weld.index), "faces": len(F),

@@ -52,7 +52,8 @@ def main(args, log):
     _say_what_was_left(json.loads(kattrs["inputs"])[-1], result.metrics, log)
     write_artifact(
         args.out, "verify",
-        {"repaired": result.X / unit, "deviation": result.deviation, "replaced": result.replaced, "new_faces": result.new, "pairs": result.pairs},
+        {"repaired": result.X / unit, "deviation": result.deviation, "replaced": result.replaced,
+         "new_faces": result.new, "pairs": result.pairs},
         params=params,
         inputs=[args.keyframes, args.classify, args.integrate, args.fit], timings=timings,
         metrics=result.metrics | carried_metrics(iattrs["metrics"], "integrate"), docs=dataset_docs("verify"))

@@ -3,8 +3,8 @@
 
 The offsets are at most a few tenths of the bounding-box diagonal ``d`` (a limb turning away from the straight path),
 so float32 keeps them to about 1e-8 d (kids-0001: 3.3e-9 d, lion-04: 6.7e-9 d), and they take a third of the
-frames' disk in float64 (kids-0001's 11 frames of 59.7k vertices, gzip: 13.1 MB -> 4.4 MB). The first and last frames are
-the reference and the target themselves. The key frames in memory are the ones read back
+frames' disk in float64 (kids-0001's 11 frames of 59.7k vertices, gzip: 13.1 MB -> 4.4 MB). The first and last
+frames are the reference and the target themselves. The key frames in memory are the ones read back
 (:func:`stored_frames`), so a pose repaired in memory and one repaired by the pipeline see the same frames.
 """
 
