@@ -1,6 +1,7 @@
 """The sparse direct solver: exact on a Laplacian system, the same in symmetric mode, singular matrices refused;
 a fill-reducing order computed once gives the ordering's fill; the Cholesky back end (CHOLMOD, or SuperLU's symmetric
-mode without it) solves the same system, one or many right-hand sides."""
+mode without it) solves the same system, one or many right-hand sides; a sequence of matrices of one pattern is
+analysed once."""
 
 import builtins
 
@@ -85,3 +86,27 @@ def test_the_cholesky_back_ends_refuse_a_singular_matrix_alike(back_end, monkeyp
         request.addfinalizer(sparse._cholmod_analyze.cache_clear)
     with pytest.raises(np.linalg.LinAlgError):  # singular: a zero pivot
         cholesky_factorized(sp.csc_matrix(np.diag([1.0, 0.0])))
+
+
+@pytest.mark.parametrize("back_end", ["cholmod", "superlu"])
+def test_a_cholesky_sequence_analyses_a_pattern_once_and_again_when_an_entry_leaves_it(back_end, monkeypatch, request):
+    if back_end == "cholmod":
+        pytest.importorskip("sksparse.cholmod", reason="scikit-sparse (CHOLMOD) is not installed: `make` builds it")
+    else:
+        _without_cholmod(monkeypatch)
+        request.addfinalizer(sparse._cholmod_analyze.cache_clear)
+    A, b = _pinned_laplacian()
+    A = sp.csc_matrix(A)
+    sequence = sparse.CholeskySequence()
+    for scale in (1.0, 2.0, 5.0):  # one pattern, other values: one analysis
+        x = sequence.factorized(scale * A).solve(b)
+        assert np.abs(scale * A @ x - b).max() < 1e-10 * np.abs(b).max()
+    corner = sp.csc_matrix(([0.1, 0.1], ([0, A.shape[0] - 1], [A.shape[0] - 1, 0])), shape=A.shape)
+    B = A + corner  # an entry outside the pattern (a new contact pair): analysed again, with the old pattern
+    x = sequence.factorized(B).solve(b)
+    assert np.abs(B @ x - b).max() < 1e-10 * np.abs(b).max()
+    x = sequence.factorized(A).solve(b)  # within the union: no new analysis
+    assert np.abs(A @ x - b).max() < 1e-10 * np.abs(b).max()
+    assert sequence.analyses == (2 if back_end == "cholmod" else 0)
+    with pytest.raises(np.linalg.LinAlgError):  # singular: a zero pivot
+        sequence.factorized(sp.csc_matrix(np.diag([1.0, 0.0])))

@@ -11,7 +11,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from posefix.mesh.geometry import face_areas
-from posefix.mesh.sparse import cholesky_factorized, fill_reducing_order
+from posefix.mesh.sparse import CholeskySequence, fill_reducing_order
 from posefix.mesh.tolerances import TINY
 
 log = logging.getLogger(__name__)
@@ -88,7 +88,7 @@ def gauss_newton(energy, V0, handles, handle_positions, F, settings=None):
     s, start = settings or SolverSettings(), time.perf_counter()
     V = np.array(V0, dtype=float)
     V[handles] = handle_positions
-    free = unknowns(energy.jacobian(V), handles)
+    free, factors = unknowns(energy.jacobian(V), handles), CholeskySequence()  # J's pattern stays: one analysis
     r = energy.residuals(V)
     errors, steps, creeping, g0 = [float(r @ r)], [], 0, None  # one log line per iteration at debug level
     while True:
@@ -96,7 +96,7 @@ def gauss_newton(energy, V0, handles, handle_positions, F, settings=None):
         g = J.T @ r
         g0 = g if g0 is None else g0
         reason = _stop_reason(J, errors[-1], len(steps), s)
-        accepted = None if reason else _line_search(energy, V, free, _step(J, g), errors[-1], s.min_step)
+        accepted = None if reason else _line_search(energy, V, free, _step(J, g, factors), errors[-1], s.min_step)
         if accepted is None:
             reason = reason or "line-search failure"
             break
@@ -181,15 +181,15 @@ def unknowns(J, handles):
     return (3 * order[:, None] + np.arange(3)).reshape(-1)
 
 
-def _step(J, g):
+def _step(J, g, factors):
     """The Gauss–Newton step d solving J^T J d = -g, (k,) float; None when J^T J is singular.
 
-    ``J`` (r, k) sparse has its columns in elimination order (:func:`unknowns`), ``g`` = J^T r (k,).
+    ``J`` (r, k) sparse has its columns in elimination order (:func:`unknowns`), ``g`` = J^T r (k,);
+    ``factors``: the run's :class:`~posefix.mesh.sparse.CholeskySequence` (one analysis of J^T J's pattern).
     """
     H = (J.T @ J).tocsr()  # sorted indices; symmetric, so its CSR arrays are its CSC arrays
     try:
-        factor = cholesky_factorized(sp.csc_matrix((H.data, H.indices, H.indptr), shape=H.shape),
-                                     np.arange(H.shape[0]))
+        factor = factors.factorized(sp.csc_matrix((H.data, H.indices, H.indptr), shape=H.shape), np.arange(H.shape[0]))
     except np.linalg.LinAlgError:  # not positive definite
         return None
     d = factor.solve(-g)

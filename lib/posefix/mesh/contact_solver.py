@@ -176,6 +176,16 @@ def tolerated_pair_keys(F, faces_to_edges, pairs, n, ne):
     return np.unique(ee), np.unique((face * n + vertex)[vertex_ok[vertex]].astype(np.int64))
 
 
+@dataclass(frozen=True)
+class SweptCandidates:
+    """The broad phase's candidates (:meth:`ContactSolver.candidates`) of the substep ``[a, b]`` (fractions of a move)
+    of :meth:`ContactSolver.swept_step`: every pair that comes closer than ``dhat`` in it."""
+
+    a: float
+    b: float
+    sets: list
+
+
 class ContactSolver:
     """Moves poses of one reference toward goals through intersection-free shapes only.
 
@@ -367,7 +377,14 @@ class ContactSolver:
 
     def collision_free_step(self, X0, X1):
         """Largest fraction in [0, 1] of the straight move ``X0`` -> ``X1`` (n, 3) that CCD proves intersection-free
-        (non-tolerated pairs).
+        (non-tolerated pairs): :meth:`swept_step`'s."""
+        return self.swept_step(X0, X1)[0]
+
+    def swept_step(self, X0, X1):
+        """``(alpha, swept)``: the largest fraction ``alpha`` in [0, 1] of the straight move ``X0`` -> ``X1`` (n, 3)
+        that CCD proves intersection-free (non-tolerated pairs), and the :class:`SweptCandidates` of the substep where
+        it stops: every pair closer than ``dhat`` anywhere in it, so the barrier's pairs at a point of it need no broad
+        phase of their own (:meth:`collisions`; IPC's line search).
 
         The move is checked in equal substeps that each move no vertex farther than the reference's mean edge
         length, from the first, until one is cut: a primitive's swept box then overlaps its neighbours' only, where
@@ -377,11 +394,11 @@ class ContactSolver:
         for k in range(substeps):
             a, b = k / substeps, (k + 1) / substeps
             Xa, Xb = X0 + a * (X1 - X0), (X1 if k == substeps - 1 else X0 + b * (X1 - X0))
-            step = min((c.compute_collision_free_stepsize(self.mesh, Xa, Xb, 0.0, _CCD)
-                        for c in self.candidates(Xa, Xb) if not c.empty()), default=1.0)
-            if step < 1.0:
-                return a + step * (b - a)
-        return 1.0
+            sets = self.candidates(Xa, Xb)
+            step = min((c.compute_collision_free_stepsize(self.mesh, Xa, Xb, 0.0, _CCD) for c in sets if not c.empty()),
+                       default=1.0)
+            if step < 1.0 or k == substeps - 1:
+                return (a + step * (b - a) if step < 1.0 else 1.0), SweptCandidates(a, b, sets)
 
     def blocked_vertices(self, X0, X1, among=None):
         """Vertices of the pairs that collide along the straight move ``X0`` -> ``X1`` (n, 3), (n,) bool: the moving
@@ -766,14 +783,16 @@ class _Newton:
         """``(X, collisions, accepted)`` after the largest step ``alpha dx`` that CCD allows and that lowers the
         energy, halving from there.
 
-        The trial points' barrier pairs come from a broad phase at each (IPC's line search: the step is
-        intersection-free, the pairs closer than ``dhat`` at its end are those the barrier sees)."""
+        The trial points' barrier pairs (IPC's line search: the step is intersection-free, the pairs closer than
+        ``dhat`` at its end are those the barrier sees) come from the candidates CCD swept where the trial point lies
+        in the substep that stopped it (the first trial always; kids-0001: 191 of the 983 broad phases, 38 of the
+        contact repair's 370 s), else from a broad phase at it."""
         s = self.s
-        alpha = s.collision_free_step(X, X + dx)
+        alpha, swept = s.swept_step(X, X + dx)
         e0 = self.energy(X) + self.kappa * s.barrier_terms(C, X)
         while alpha > ROUNDOFF:
             X_new = X + alpha * dx
-            C_new = s.collisions(X_new)
+            C_new = s.collisions(X_new, swept.sets if swept.a <= alpha <= swept.b else None)
             if self.energy(X_new) + self.kappa * s.barrier_terms(C_new, X_new) <= e0:
                 return X_new, C_new, True
             alpha *= 0.5

@@ -4,7 +4,8 @@ Laplacian and Poisson systems (harmonic extension, key frames, later the skeleta
 and the volumetric editor) and Gauss–Newton's normal equations all go through :func:`factorized`,
 so that a faster back end replaces SuperLU in one place. :func:`cholesky_factorized` is that back end for
 the large symmetric positive definite systems (the contact solver's Newton steps): CHOLMOD's supernodal
-Cholesky (scikit-sparse, SuiteSparse) when it is installed, SuperLU's symmetric mode otherwise.
+Cholesky (scikit-sparse, SuiteSparse) when it is installed, SuperLU's symmetric mode otherwise;
+:class:`CholeskySequence` factorizes a sequence of matrices of one pattern (Gauss–Newton's steps) with one analysis.
 """
 
 import functools
@@ -96,6 +97,103 @@ def cholesky_factorized(A, order=None):
         return SimpleNamespace(solve=analyze(A, mode="supernodal", ordering_method="amd").cholesky(A).solve_A)
     except CholmodNotPositiveDefiniteError as error:
         raise np.linalg.LinAlgError(str(error)) from error
+
+
+class CholeskySequence:
+    """Cholesky factorizations of a sequence of symmetric positive definite matrices whose sparsity patterns mostly
+    repeat (Gauss–Newton's steps): CHOLMOD analyses a pattern once, with METIS's nested-dissection ordering, and
+    factorizes every later matrix whose pattern lies within it numerically only.
+
+    METIS's analysis costs more than AMD's and its factors have less fill, so it pays from the second matrix of a
+    pattern on. On the 179k-unknown Newton matrix of the contact solver on kids-0001 (one thread): AMD 0.3 s of
+    analysis and 1.7 s of factorization, METIS 1.6 s and 1.3 s. The contact solver factorizes anew
+    (:func:`cholesky_factorized`): its contacts slide, and each Newton step brings hundreds of entries that lie
+    outside the last pattern, most of them outside its factor's fill too. A matrix with an entry outside the analysed
+    pattern is analysed again, with the union of the two patterns, unless the union has grown past
+    :data:`PATTERN_GROWTH` times the new pattern. Without CHOLMOD, each matrix is factorized anew.
+
+    Examples
+    --------
+    >>> import numpy as np, scipy.sparse as sp
+    >>> sequence = CholeskySequence()
+    >>> A = sp.csc_matrix([[4.0, 1.0], [1.0, 3.0]])
+    >>> [sequence.factorized(k * A).solve(np.array([5.0, 4.0])).round(12).tolist() for k in (1.0, 2.0)]
+    [[1.0, 1.0], [0.5, 0.5]]
+    """
+
+    def __init__(self):
+        self.analyses, self._pattern, self._factor, self._last = 0, None, None, None
+
+    def factorized(self, A, order=None):
+        """A factorization of ``A`` (n, n) sparse, symmetric positive definite, as ``.solve(b)``: valid until the next
+        call (the factor is updated in place).
+
+        Parameters
+        ----------
+        A : (n, n) scipy.sparse matrix
+        order : (n,) int, optional
+            The elimination order without CHOLMOD (:func:`cholesky_factorized`).
+
+        Raises
+        ------
+        numpy.linalg.LinAlgError
+            ``A`` is not (numerically) positive definite.
+        """
+        A = sp.csc_matrix(A)
+        if _cholmod_analyze() is None:
+            return cholesky_factorized(A, order)
+        from sksparse.cholmod import CholmodNotPositiveDefiniteError
+
+        A.sort_indices()
+        if not self._covers(A):
+            self._analyse(A)
+        try:
+            self._factor.cholesky_inplace(A)
+        except CholmodNotPositiveDefiniteError as error:
+            raise np.linalg.LinAlgError(str(error)) from error
+        return SimpleNamespace(solve=self._factor.solve_A)
+
+    def _covers(self, A):
+        """Whether the analysed pattern holds ``A``'s (sorted CSC) entries."""
+        if self._pattern is None or A.shape != self._pattern.shape:
+            return False
+        if self._last is not None and np.array_equal(A.indptr, self._last[0]) and np.array_equal(A.indices,
+                                                                                                self._last[1]):
+            return True
+        inside = _pattern(A).multiply(self._pattern).nnz == A.nnz
+        if inside:
+            self._last = A.indptr.copy(), A.indices.copy()
+        return inside
+
+    def _analyse(self, A):
+        """Analyse ``A``'s pattern with, unless the union has grown too large, the last one's."""
+        from sksparse.cholmod import CholmodNotInstalledError
+
+        analyze = _cholmod_analyze()
+        pattern = _pattern(A)
+        if self._pattern is not None and self._pattern.shape == A.shape:
+            union = _pattern(pattern + self._pattern)
+            pattern = union if union.nnz <= PATTERN_GROWTH * pattern.nnz else pattern
+        try:
+            self._factor = analyze(pattern, mode="supernodal", ordering_method="metis")
+        except CholmodNotInstalledError:  # a CHOLMOD built without METIS: its own AMD
+            self._factor = analyze(pattern, mode="supernodal", ordering_method="amd")
+        self._pattern, self._last, self.analyses = pattern, (A.indptr.copy(), A.indices.copy()), self.analyses + 1
+
+
+PATTERN_GROWTH = 1.5
+"""Most entries of an analysed pattern relative to the new matrix's pattern (:class:`CholeskySequence`): beyond, the
+old entries are dropped (their fill would cost each factorization more than a new analysis)."""
+
+
+def _pattern(A):
+    """The sparsity pattern of ``A`` (n, n) sparse as a CSC matrix of ones with sorted indices (stored zeros
+    included)."""
+    A = sp.csc_matrix(A)
+    P = sp.csc_matrix((np.ones(len(A.indices)), A.indices, A.indptr), shape=A.shape)
+    P.sum_duplicates()
+    P.data[:] = 1.0
+    return P
 
 
 @functools.cache
