@@ -159,6 +159,28 @@ def test_a_step_of_many_edge_lengths_is_checked_in_substeps_up_to_its_first_cont
     assert solver.collision_free_step(V, V + moving * [2.0, 0.0, 0.0]) == 1.0  # clear of the wall all the way
 
 
+def test_the_barrier_pairs_from_the_swept_candidates_are_those_of_a_broad_phase_at_the_point():
+    """The line search's trial points take their barrier pairs from the candidates CCD swept for the step: the same
+    pairs (an edge pair's edges in either order) as a broad phase of their own, so the same barrier, where CCD stops
+    the ball before the wall and short of it."""
+    wall = trimesh.creation.box(extents=[0.2, 4.0, 4.0])  # its face at x = -0.1
+    ball = sphere([-0.5, 0, 0], radius=0.2, subdivisions=2)  # its front at x = -0.3
+    V, F = union((np.asarray(wall.vertices), np.asarray(wall.faces)), ball)
+    solver = ContactSolver(V, F, settings=ContactSettings(dhat=1e-2))  # dhat 0.022
+    moving = (np.arange(len(V)) >= len(wall.vertices))[:, None]
+    X1 = V + moving * [0.3, 0.0, 0.0]  # the front through the wall's face, in two substeps
+    alpha, swept = solver.swept_step(V, X1)
+    assert 0.0 < swept.a < alpha < swept.b == 1.0
+
+    for t in (alpha, 0.5 * (swept.a + alpha)):
+        X = V + t * (X1 - V)
+        reused, own = solver.collisions(X, swept.sets), solver.collisions(X)
+        assert sum(map(len, reused)) == sum(map(len, own))
+        assert solver.barrier_terms(reused, X) == pytest.approx(solver.barrier_terms(own, X), rel=1e-12)
+        assert np.allclose(solver.barrier_terms(reused, X, 1), solver.barrier_terms(own, X, 1), rtol=1e-12, atol=0)
+    assert sum(map(len, solver.collisions(V + alpha * (X1 - V)))) > 10  # the front is within dhat of the wall there
+
+
 def test_two_intersection_sites_of_the_reference_cannot_pass_through_each_other():
     """Two sites where the reference intersects itself, each a triangle T through a triangle U, 5 apart: all four
     faces are tolerated, yet T of the first site driven through U of the second stops at it (tolerating every
