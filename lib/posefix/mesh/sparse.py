@@ -122,7 +122,7 @@ class CholeskySequence:
     """
 
     def __init__(self):
-        self.analyses, self._pattern, self._factor, self._last = 0, None, None, None
+        self.analyses, self._pattern, self._factor = 0, None, None
 
     def factorized(self, A, order=None):
         """A factorization of ``A`` (n, n) sparse, symmetric positive definite, as ``.solve(b)``: valid until the next
@@ -155,15 +155,12 @@ class CholeskySequence:
 
     def _covers(self, A):
         """Whether the analysed pattern holds ``A``'s (sorted CSC) entries."""
-        if self._pattern is None or A.shape != self._pattern.shape:
+        P = self._pattern
+        if P is None or A.shape != P.shape:
             return False
-        if self._last is not None and np.array_equal(A.indptr, self._last[0]) and np.array_equal(A.indices,
-                                                                                                self._last[1]):
+        if np.array_equal(A.indptr, P.indptr) and np.array_equal(A.indices, P.indices):
             return True
-        inside = _pattern(A).multiply(self._pattern).nnz == A.nnz
-        if inside:
-            self._last = A.indptr.copy(), A.indices.copy()
-        return inside
+        return _pattern(A).multiply(P).nnz == A.nnz
 
     def _analyse(self, A):
         """Analyse ``A``'s pattern with, unless the union has grown too large, the last one's."""
@@ -178,7 +175,7 @@ class CholeskySequence:
             self._factor = analyze(pattern, mode="supernodal", ordering_method="metis")
         except CholmodNotInstalledError:  # a CHOLMOD built without METIS: its own AMD
             self._factor = analyze(pattern, mode="supernodal", ordering_method="amd")
-        self._pattern, self._last, self.analyses = pattern, (A.indptr.copy(), A.indices.copy()), self.analyses + 1
+        self._pattern, self.analyses = pattern, self.analyses + 1
 
 
 PATTERN_GROWTH = 1.5
@@ -187,12 +184,12 @@ old entries are dropped (their fill would cost each factorization more than a ne
 
 
 def _pattern(A):
-    """The sparsity pattern of ``A`` (n, n) sparse as a CSC matrix of ones with sorted indices (stored zeros
+    """The sparsity pattern of ``A`` (n, n) sparse as a CSC matrix of int8 ones with sorted indices (stored zeros
     included)."""
     A = sp.csc_matrix(A)
-    P = sp.csc_matrix((np.ones(len(A.indices)), A.indices, A.indptr), shape=A.shape)
+    P = sp.csc_matrix((np.ones(len(A.indices), dtype=np.int8), A.indices.copy(), A.indptr.copy()), shape=A.shape)
     P.sum_duplicates()
-    P.data[:] = 1.0
+    P.data[:] = 1
     return P
 
 
