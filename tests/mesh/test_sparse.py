@@ -60,13 +60,19 @@ def _without_cholmod(monkeypatch):
     sparse._cholmod_analyze.cache_clear()
 
 
-@pytest.mark.parametrize("back_end", ["cholmod", "superlu"])
-def test_the_cholesky_back_ends_solve_a_pinned_cotangent_laplacian(back_end, monkeypatch, request, caplog):
-    if back_end == "cholmod":
+@pytest.fixture(params=["cholmod", "superlu"])
+def back_end(request, monkeypatch):
+    """The Cholesky back end of a test: CHOLMOD (skipped when it is not installed) or SuperLU (CHOLMOD's import
+    refused)."""
+    if request.param == "cholmod":
         pytest.importorskip("sksparse.cholmod", reason="scikit-sparse (CHOLMOD) is not installed: `make` builds it")
     else:
         _without_cholmod(monkeypatch)
         request.addfinalizer(sparse._cholmod_analyze.cache_clear)
+    return request.param
+
+
+def test_the_cholesky_back_ends_solve_a_pinned_cotangent_laplacian(back_end, caplog):
     A, b = _pinned_laplacian()
     solver = cholesky_factorized(A)
     x = solver.solve(b)
@@ -77,24 +83,12 @@ def test_the_cholesky_back_ends_solve_a_pinned_cotangent_laplacian(back_end, mon
     assert ("CHOLMOD) is not installed" in caplog.text) == (back_end == "superlu")
 
 
-@pytest.mark.parametrize("back_end", ["cholmod", "superlu"])
-def test_the_cholesky_back_ends_refuse_a_singular_matrix_alike(back_end, monkeypatch, request):
-    if back_end == "cholmod":
-        pytest.importorskip("sksparse.cholmod", reason="scikit-sparse (CHOLMOD) is not installed: `make` builds it")
-    else:
-        _without_cholmod(monkeypatch)
-        request.addfinalizer(sparse._cholmod_analyze.cache_clear)
+def test_the_cholesky_back_ends_refuse_a_singular_matrix_alike(back_end):
     with pytest.raises(np.linalg.LinAlgError):  # singular: a zero pivot
         cholesky_factorized(sp.csc_matrix(np.diag([1.0, 0.0])))
 
 
-@pytest.mark.parametrize("back_end", ["cholmod", "superlu"])
-def test_a_cholesky_sequence_analyses_a_pattern_once_and_again_when_an_entry_leaves_it(back_end, monkeypatch, request):
-    if back_end == "cholmod":
-        pytest.importorskip("sksparse.cholmod", reason="scikit-sparse (CHOLMOD) is not installed: `make` builds it")
-    else:
-        _without_cholmod(monkeypatch)
-        request.addfinalizer(sparse._cholmod_analyze.cache_clear)
+def test_a_cholesky_sequence_analyses_a_pattern_once_and_again_when_an_entry_leaves_it(back_end):
     A, b = _pinned_laplacian()
     A = sp.csc_matrix(A)
     sequence = sparse.CholeskySequence()
