@@ -785,8 +785,8 @@ class _Newton:
 
         The trial points' barrier pairs (IPC's line search: the step is intersection-free, the pairs closer than
         ``dhat`` at its end are those the barrier sees) come from the candidates CCD swept where the trial point lies
-        in the substep that stopped it (the first trial always; kids-0001: 191 of the 983 broad phases, 38 of the
-        contact repair's 370 s), else from a broad phase at it."""
+        in the substep that stopped it (the first trial always), else from a broad phase at it (kids-0001's contact
+        repair: 191 trial points, 38 of its 370 s; from the swept candidates 0.14 s each instead of 0.25 s)."""
         s = self.s
         alpha, swept = s.swept_step(X, X + dx)
         e0 = self.energy(X) + self.kappa * s.barrier_terms(C, X)
