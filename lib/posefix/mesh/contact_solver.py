@@ -16,8 +16,8 @@ The reference may intersect itself. Its intersecting face pairs are *tolerated*:
 face-vertex pairs of each (9 and 6) are removed from the broad phase's candidates before the barrier and the
 CCD see them, and no other primitive pair is: a face that does not intersect in the reference never comes to
 intersect anything, and two tolerated faces of different intersection sites cannot pass through each other. Left out
-too: pairs touching at rest, and, from the elastic solve's barrier (not from its CCD), pairs one edge shorter than
-``dhat_min`` apart (:func:`short_edge_pair_keys`: the barrier would push them apart at rest).
+too: pairs touching at rest, and pairs one edge shorter than ``dhat_min`` apart (:func:`short_edge_pair_keys`:
+the barrier would push them apart at rest).
 ``ipctk``'s vertex filter alone would silence every pair whose vertices all belong to tolerated faces (a
 primitive next to them too), so the region's own broad phase gives those pairs back, less the tolerated ones:
 the Python work is the tolerated region's, not the mesh's.
@@ -70,8 +70,7 @@ class ContactSettings:
     dhat_min : float
         Smallest barrier activation distance / d: parts of the reference closer than twice this (lion: 753 pairs
         below 5e-4 d, the closest 4.5e-7 d apart) feel the barrier at rest and are held about where they are;
-        primitives one edge shorter than this apart are in no barrier pair of the elastic solve
-        (:func:`short_edge_pair_keys`).
+        primitives one edge shorter than this apart are in no barrier pair (:func:`short_edge_pair_keys`).
     touching : float
         Primitive pairs of the reference closer than ``touching * d`` are tolerated (parts touching at rest:
         the barrier cannot start from a distance of 0).
@@ -186,8 +185,7 @@ def short_edge_pair_keys(V, F, E, limit):
 
     Such a pair is at most the edge's length apart, so a barrier whose activation distance exceeds it pushes the
     pair apart at rest and stretches the edge (a lion's sliver faces, edges of 7e-5 d: 6.6x under a barrier of
-    2e-4 d). IPC leaves out only the pairs that share a vertex; an elastic energy keeps these
-    (:meth:`ContactSolver.compute_elastic` leaves them out of its barrier, and its CCD still checks them).
+    2e-4 d). IPC leaves out only the pairs that share a vertex; the shape's energy keeps these.
 
     Parameters
     ----------
@@ -253,8 +251,8 @@ class ContactSolver:
         Face pairs that may intersect (the reference's own intersecting pairs); none by default. Only their
         primitive pairs are dropped (:func:`tolerated_pair_keys`): two tolerated faces of different intersection
         sites cannot pass through each other. Primitive pairs closer than ``touching * d`` in the reference (parts
-        touching at rest) are tolerated too; the elastic solve's barrier (not its CCD) leaves out those one edge
-        shorter than ``dhat_min * d`` apart (:func:`short_edge_pair_keys`).
+        touching at rest) are tolerated too, and those one edge shorter than ``dhat_min * d`` apart
+        (:func:`short_edge_pair_keys`).
     settings : ContactSettings
         ``ipctk`` runs on one thread: its parallel broad phase and barrier sums add up in an order that changes from
         run to run (lion-04's verify at 2 threads: two runs 1.7e-3 apart, 24 and 21 Newton iterations; at 1, equal).
@@ -283,12 +281,9 @@ class ContactSolver:
         self.tolerated_faces = np.zeros(len(F), dtype=bool)
         self.tolerated_faces[pairs.ravel()] = True
         self._touching = (np.zeros(0, np.int64), np.zeros(0, np.int64))
-        self._touching = self._touching_pairs(V_ref)
-        self._short = short_edge_pair_keys(V_ref, self.F, E, settings.dhat_min * self.d)
-        self._short_out, self._elastic_region = False, None
-        can_collide, self._sub = self._tolerated_region(V_ref, E, self._touching)
-        if can_collide is not None:
-            self.mesh.can_collide = can_collide
+        short = short_edge_pair_keys(V_ref, self.F, E, settings.dhat_min * self.d)
+        self._touching = tuple(np.union1d(a, b) for a, b in zip(self._touching_pairs(V_ref), short))
+        self._sub = self._tolerated_region(V_ref, E)
         self.clearance = self._clearance(V_ref)
         self.dhat = float(np.clip(0.5 * self.clearance, settings.dhat_min * self.d, settings.dhat * self.d))
         self.barrier = ipctk.BarrierPotential(self.dhat, 1.0)
@@ -297,9 +292,9 @@ class ContactSolver:
         order = fill_reducing_order(pattern)  # the 3 x 3 blocks' order from the vertices' (kids240: 20 min -> s)
         self._order = order, (3 * order[:, None] + np.arange(3)).ravel()
         self._system = (None, None)
-        log.info("contact solver: %d vertices, %d tolerated face pairs, %d pairs touching at rest and %d one short edge "
-                 "apart, clearance %.2e d, dhat %.2e d", len(V_ref), len(pairs), sum(len(k) for k in self._touching),
-                 sum(len(k) for k in self._short), self.clearance / self.d, self.dhat / self.d)
+        log.info("contact solver: %d vertices, %d tolerated face pairs and %d pairs touching or one short edge apart "
+                 "at rest, clearance %.2e d, dhat %.2e d", len(V_ref), len(pairs), sum(len(k) for k in self._touching),
+                 self.clearance / self.d, self.dhat / self.d)
 
     def _touching_pairs(self, V):
         """(edge-pair keys, face-vertex keys) of the non-tolerated pairs closer than ``touching * d`` at ``V``: before
@@ -337,51 +332,30 @@ class ContactSolver:
                 return min(distance, largest)
             radius *= 2.0
 
-    def _tolerated_region(self, V, E, keys):
-        """``(filter, region)``: the broad phase's filter and the tolerated region's own collision mesh (both None if
-        there is no region).
+    def _tolerated_region(self, V, E):
+        """Set the broad phase's filter and return the tolerated region's own collision mesh (None if none).
 
         ipctk's vertex filter (``make_vertex_patches_filter``) drops every pair of primitives whose vertices all lie
-        in the region (the tolerated faces' vertices and those of the pairs of ``keys``: edge-pair keys and
-        face-vertex keys); :meth:`candidates` adds back those of them that are not tolerated, from the broad phase of
-        the region's own mesh: ``(mesh, vertices (r,), edges (e_r,), faces (f_r,))``, the last three the region's
-        primitives' ids in the whole mesh."""
+        in the region (the tolerated faces' and touching pairs' vertices); :meth:`candidates` adds back those of them
+        that are not tolerated, from the broad phase of the region's own mesh: ``(mesh, vertices (r,), edges (e_r,),
+        faces (f_r,))``, the last three the region's primitives' ids in the whole mesh."""
         region = np.zeros(len(V), dtype=bool)
         region[self.F[self.tolerated_faces].ravel()] = True
         n, ne = len(V), len(E)
-        pairs_ee, pairs_fv = keys
-        region[E[np.concatenate([pairs_ee // ne, pairs_ee % ne])].ravel()] = True
-        region[self.F[pairs_fv // n].ravel()] = True
-        region[pairs_fv % n] = True
+        touching_ee, touching_fv = self._touching
+        region[E[np.concatenate([touching_ee // ne, touching_ee % ne])].ravel()] = True
+        region[self.F[touching_fv // n].ravel()] = True
+        region[touching_fv % n] = True
         if not region.any():
-            return None, None
-        can_collide = ipctk.make_vertex_patches_filter(np.where(region, 0, np.arange(1, n + 1)).astype(np.int32))
+            return None
+        self.mesh.can_collide = ipctk.make_vertex_patches_filter(np.where(region, 0, np.arange(1, n + 1)).astype(np.int32))
         vertices = np.flatnonzero(region)
         local = np.full(n, -1, dtype=np.int32)
         local[vertices] = np.arange(len(vertices))
         edges = np.flatnonzero(region[E].all(axis=1))
         faces = np.flatnonzero(region[self.F].all(axis=1))
         mesh = ipctk.CollisionMesh(V[vertices], local[E[edges]], local[self.F[faces]])
-        return can_collide, (mesh, vertices, edges, faces)
-
-    @contextmanager
-    def _short_pairs_ccd_only(self):
-        """Within: the pairs one short edge apart (:func:`short_edge_pair_keys`) are in no barrier pair, and CCD still
-        checks them (:class:`_CcdOnly`): the elastic solve's energy keeps their edges, a goal's does not (without them
-        in the barrier the contact repair's lion-08 ended with a new intersecting face)."""
-        if not any(len(k) for k in self._short):
-            yield
-            return
-        if self._elastic_region is None:  # the tolerated region grown by the short pairs' vertices
-            keys = tuple(np.union1d(a, b) for a, b in zip(self._touching, self._short))
-            self._elastic_region = self._tolerated_region(self.mesh.rest_positions, self.mesh.edges, keys)
-        saved = self.mesh.can_collide, self._sub
-        self.mesh.can_collide, self._sub = self._elastic_region
-        self._short_out = True
-        try:
-            yield
-        finally:
-            (self.mesh.can_collide, self._sub), self._short_out = saved, False
+        return mesh, vertices, edges, faces
 
     def candidates(self, X0, X1=None, inflation=None):
         """The broad phase's primitive pairs near ``X0`` (or swept from ``X0`` to ``X1``), tolerated pairs removed.
@@ -400,8 +374,7 @@ class ContactSolver:
         list of ipctk.Candidates
             The whole mesh's (ipctk's vertex filter applied), then, when there are any, the tolerated region's own
             pairs that are not tolerated, in the whole mesh's ids (a second, small set: merging it into the first
-            would copy that one through Python); within :meth:`_short_pairs_ccd_only`, those one short edge apart
-            in a third set, for CCD only (:class:`_CcdOnly`).
+            would copy that one through Python).
         """
         X1 = X0 if X1 is None else X1
         inflation = 0.5 * self.dhat if inflation is None else inflation
@@ -416,14 +389,12 @@ class ContactSolver:
         ee, fv = edges[ee], np.column_stack([faces[fv[:, 0]], vertices[fv[:, 1]]])
         ee_keys, fv_keys = self._keys(ee, fv)
         keep_ee, keep_fv = self._kept(ee_keys, fv_keys)
-        sets = [c]
-        if self._short_out:
-            short_ee, short_fv = keep_ee & np.isin(ee_keys, self._short[0]), keep_fv & np.isin(fv_keys, self._short[1])
-            keep_ee, keep_fv = keep_ee & ~short_ee, keep_fv & ~short_fv
-            sets.append(_candidate_set(ee[short_ee], fv[short_fv], _CcdOnly))
-        if keep_ee.any() or keep_fv.any():
-            sets.insert(1, _candidate_set(ee[keep_ee], fv[keep_fv], ipctk.Candidates))
-        return sets
+        if not (keep_ee.any() or keep_fv.any()):
+            return [c]
+        extra = ipctk.Candidates()
+        extra.ee_candidates = [ipctk.EdgeEdgeCandidate(int(a), int(b)) for a, b in ee[keep_ee]]
+        extra.fv_candidates = [ipctk.FaceVertexCandidate(int(f), int(v)) for f, v in fv[keep_fv]]
+        return [c, extra]
 
     def _kept(self, ee_keys, fv_keys):
         """Masks of the edge-edge pairs and face-vertex pairs (their keys (k,) and (l,), :meth:`_keys`) that are
@@ -446,11 +417,9 @@ class ContactSolver:
 
     def collisions(self, X, candidates=None, dhat=None):
         """The barrier's active pairs (closer than ``dhat``, the solver's by default) at ``X``, tolerated pairs
-        excluded: a list of ipctk.NormalCollisions, one per set of :meth:`candidates` but those for CCD only."""
+        excluded: a list of ipctk.NormalCollisions, one per set of :meth:`candidates`."""
         out = []
         for c in self.candidates(X) if candidates is None else candidates:
-            if isinstance(c, _CcdOnly):
-                continue
             C = ipctk.NormalCollisions()
             C.build(c, self.mesh, X, self.dhat if dhat is None else dhat)
             out.append(C)
@@ -652,7 +621,7 @@ class ContactSolver:
         newton = _ElasticNewton(self, np.asarray(goal, dtype=np.float64), np.asarray(weights, dtype=np.float64),
                                 elastic.restricted(~pinned) if pinned.any() else elastic, pinned,
                                 self.settings.tolerance)
-        with self._short_pairs_ccd_only(), self._moving(~pinned):
+        with self._moving(~pinned):
             X, converged, iterations = newton.run(np.array(start, dtype=np.float64), max_iterations)
         C = self.collisions(X)
         return ContactResult(X, converged, iterations, self.contact_vertices(C, len(X)), self.min_distance(X, C),
@@ -723,19 +692,6 @@ class ContactSolver:
             log.debug("waypoint %d of %d: %d Newton iterations", k + 1, len(waypoints), result.iterations)
         result.iterations, result.converged, result.seconds = iterations, converged, seconds
         return result
-
-
-class _CcdOnly(ipctk.Candidates):
-    """Candidates that CCD checks and the barrier leaves out (:meth:`ContactSolver._short_pairs_ccd_only`)."""
-
-
-def _candidate_set(ee, fv, kind):
-    """A ``kind`` (ipctk.Candidates or :class:`_CcdOnly`) of the edge pairs ``ee`` (k, 2) and face-vertex pairs
-    ``fv`` (l, 2)."""
-    out = kind()
-    out.ee_candidates = [ipctk.EdgeEdgeCandidate(int(a), int(b)) for a, b in ee]
-    out.fv_candidates = [ipctk.FaceVertexCandidate(int(f), int(v)) for f, v in fv]
-    return out
 
 
 def _box_distance(X, stencils, split):
