@@ -15,9 +15,7 @@ reference (so the bi-Laplacian smoothness term spreads a contact's push over abo
 The reference may intersect itself. Its intersecting face pairs are *tolerated*: the edge-edge and
 face-vertex pairs of each (9 and 6) are removed from the broad phase's candidates before the barrier and the
 CCD see them, and no other primitive pair is: a face that does not intersect in the reference never comes to
-intersect anything, and two tolerated faces of different intersection sites cannot pass through each other. Left out
-too: pairs touching at rest, and pairs one edge shorter than ``dhat_min`` apart (:func:`short_edge_pair_keys`:
-the barrier would push them apart at rest).
+intersect anything, and two tolerated faces of different intersection sites cannot pass through each other.
 ``ipctk``'s vertex filter alone would silence every pair whose vertices all belong to tolerated faces (a
 primitive next to them too), so the region's own broad phase gives those pairs back, less the tolerated ones:
 the Python work is the tolerated region's, not the mesh's.
@@ -69,8 +67,7 @@ class ContactSettings:
         touching) when that is smaller, so that the barrier does not push apart parts that are close at rest.
     dhat_min : float
         Smallest barrier activation distance / d: parts of the reference closer than twice this (lion: 753 pairs
-        below 5e-4 d, the closest 4.5e-7 d apart) feel the barrier at rest and are held about where they are;
-        primitives one edge shorter than this apart are in no barrier pair (:func:`short_edge_pair_keys`).
+        below 5e-4 d, the closest 4.5e-7 d apart) feel the barrier at rest and are held about where they are.
     touching : float
         Primitive pairs of the reference closer than ``touching * d`` are tolerated (parts touching at rest:
         the barrier cannot start from a distance of 0).
@@ -179,56 +176,6 @@ def tolerated_pair_keys(F, faces_to_edges, pairs, n, ne):
     return np.unique(ee), np.unique((face * n + vertex)[vertex_ok[vertex]].astype(np.int64))
 
 
-def short_edge_pair_keys(V, F, E, limit):
-    """Keys of the primitive pairs one edge shorter than ``limit`` apart: an edge ``(u, w)`` joins them, a vertex of
-    one primitive to a vertex of the other.
-
-    Such a pair is at most the edge's length apart, so a barrier whose activation distance exceeds it pushes the
-    pair apart at rest and stretches the edge (a lion's sliver faces, edges of 7e-5 d: 6.6x under a barrier of
-    2e-4 d). IPC leaves out only the pairs that share a vertex; the shape's energy keeps these.
-
-    Parameters
-    ----------
-    V : (n, 3) float
-    F : (m, 3) int
-    E : (ne, 2) int
-        The mesh's edges (``ipctk.edges(F)``: the keys' edge ids).
-    limit : float
-        Length units.
-
-    Returns
-    -------
-    ee : (k,) int64
-        Sorted keys ``min(a, b) ne + max(a, b)`` of the edge pairs ``(a, b)`` sharing no vertex.
-    fv : (l,) int64
-        Sorted keys ``f n + v`` of the face-vertex pairs ``(f, v)``, ``v`` not in ``f``.
-
-    Examples
-    --------
-    >>> V = np.array([[0.0, 0, 0], [1, 0, 0], [1e-6, 1, 0], [0, 1, 0], [0.5, 2, 0]])  # (2, 3) 1e-6 long
-    >>> F = np.array([[0, 1, 2], [0, 2, 3], [2, 4, 3]])
-    >>> ee, fv = short_edge_pair_keys(V, F, np.array([[0, 1], [1, 2], [0, 2], [2, 3], [0, 3], [2, 4], [3, 4]]), 1e-3)
-    >>> [(int(k) // 5, int(k) % 5) for k in fv], len(ee)  # face 0 and vertex 3; (1, 2) and (0, 3), ...
-    ([(0, 3)], 4)
-    """
-    n, E = len(V), np.asarray(E, dtype=np.int64)
-    short = E[np.linalg.norm(V[E[:, 0]] - V[E[:, 1]], axis=1) < limit]
-    if not len(short):
-        return np.zeros(0, np.int64), np.zeros(0, np.int64)
-    faces = sp.csr_matrix((np.ones(F.size), (np.repeat(np.arange(len(F)), 3), F.ravel())), shape=(len(F), n)).T.tocsr()
-    edges = sp.csr_matrix((np.ones(E.size), (np.repeat(np.arange(len(E)), 2), E.ravel())), shape=(len(E), n)).T.tocsr()
-    ee, fv = [], []
-    for u, w in np.vstack([short, short[:, ::-1]]):
-        f = faces.indices[faces.indptr[w]:faces.indptr[w + 1]]
-        fv.append(f[(F[f] != u).all(axis=1)] * n + u)
-        a = edges.indices[edges.indptr[u]:edges.indptr[u + 1]]
-        b = edges.indices[edges.indptr[w]:edges.indptr[w + 1]]
-        a, b = np.repeat(a, len(b)), np.tile(b, len(a))
-        apart = ~(E[a][:, :, None] == E[b][:, None, :]).any(axis=(1, 2))
-        ee.append(np.minimum(a, b)[apart] * len(E) + np.maximum(a, b)[apart])
-    return np.unique(np.concatenate(ee)).astype(np.int64), np.unique(np.concatenate(fv)).astype(np.int64)
-
-
 @dataclass(frozen=True)
 class SweptCandidates:
     """The broad phase's candidates (:meth:`ContactSolver.candidates`) of the substep ``[a, b]`` (fractions of a move)
@@ -251,8 +198,7 @@ class ContactSolver:
         Face pairs that may intersect (the reference's own intersecting pairs); none by default. Only their
         primitive pairs are dropped (:func:`tolerated_pair_keys`): two tolerated faces of different intersection
         sites cannot pass through each other. Primitive pairs closer than ``touching * d`` in the reference (parts
-        touching at rest) are tolerated too, and those one edge shorter than ``dhat_min * d`` apart
-        (:func:`short_edge_pair_keys`).
+        touching at rest) are tolerated too.
     settings : ContactSettings
         ``ipctk`` runs on one thread: its parallel broad phase and barrier sums add up in an order that changes from
         run to run (lion-04's verify at 2 threads: two runs 1.7e-3 apart, 24 and 21 Newton iterations; at 1, equal).
@@ -281,8 +227,7 @@ class ContactSolver:
         self.tolerated_faces = np.zeros(len(F), dtype=bool)
         self.tolerated_faces[pairs.ravel()] = True
         self._touching = (np.zeros(0, np.int64), np.zeros(0, np.int64))
-        short = short_edge_pair_keys(V_ref, self.F, E, settings.dhat_min * self.d)
-        self._touching = tuple(np.union1d(a, b) for a, b in zip(self._touching_pairs(V_ref), short))
+        self._touching = self._touching_pairs(V_ref)
         self._sub = self._tolerated_region(V_ref, E)
         self.clearance = self._clearance(V_ref)
         self.dhat = float(np.clip(0.5 * self.clearance, settings.dhat_min * self.d, settings.dhat * self.d))
@@ -292,8 +237,8 @@ class ContactSolver:
         order = fill_reducing_order(pattern)  # the 3 x 3 blocks' order from the vertices' (kids240: 20 min -> s)
         self._order = order, (3 * order[:, None] + np.arange(3)).ravel()
         self._system = (None, None)
-        log.info("contact solver: %d vertices, %d tolerated face pairs and %d pairs touching or one short edge apart "
-                 "at rest, clearance %.2e d, dhat %.2e d", len(V_ref), len(pairs), sum(len(k) for k in self._touching),
+        log.info("contact solver: %d vertices, %d tolerated face pairs and %d pairs touching at rest, clearance %.2e d, "
+                 "dhat %.2e d", len(V_ref), len(pairs), sum(len(k) for k in self._touching),
                  self.clearance / self.d, self.dhat / self.d)
 
     def _touching_pairs(self, V):
